@@ -1,0 +1,1 @@
+"""The ``slipcycle`` command line."""

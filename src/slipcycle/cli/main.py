@@ -1,0 +1,56 @@
+"""Entry point of the ``slipcycle`` command.
+
+Each sub-command lives in its own module of this package with two functions,
+``add_parser(subparsers)`` and ``execute(args) -> int``; :data:`COMMANDS` lists them.
+Invalid input ends with one line ``error: <key>: <problem>`` on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from slipcycle import __version__
+
+COMMANDS = ["run", "demo", "map", "reduce"]
+
+EXIT_BAD_INPUT = 2
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="slipcycle",
+        description="Frictional interfaces under periodic loading.",
+    )
+    parser.add_argument("--version", action="version", version=f"slipcycle {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for name in COMMANDS:
+        try:
+            module = importlib.import_module(f"slipcycle.cli.cmd_{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"slipcycle.cli.cmd_{name}":
+                continue  # command not implemented in this version
+            raise
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    from slipcycle.io import CaseError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.execute(args) or 0)
+    except CaseError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

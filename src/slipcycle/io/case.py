@@ -1,0 +1,310 @@
+"""Reading and validating TOML case files (SPEC §6).
+
+A case file names its model at the top level (``model = "halfspace"``); the table of that
+name holds the model, ``[loading]`` the loads and ``[run]`` the numerical settings.
+
+Validation happens before any computation. Every problem is reported as a
+:class:`CaseError` whose message names the offending key with its full dotted path, e.g.
+``halfspace.radius: must be > 0, got -0.01``. A :class:`Section` reader records which keys
+were read, so that unknown keys (typos) are refused as well.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Case", "CaseError", "Section", "read_case", "parse_case_text"]
+
+_MISSING = object()
+
+
+class CaseError(ValueError):
+    """A case file is invalid. ``key`` is the dotted path of the offending key."""
+
+    def __init__(self, key: str, problem: str):
+        self.key = key
+        self.problem = problem
+        super().__init__(f"{key}: {problem}" if key else problem)
+
+
+def _join(prefix: str, key: str) -> str:
+    return f"{prefix}.{key}" if prefix else key
+
+
+class Section:
+    """Validating reader over one TOML table.
+
+    Each accessor converts and checks one key and remembers that it was read;
+    :meth:`finish` then refuses any key that no accessor asked for.
+
+    Parameters
+    ----------
+    data : dict
+        The TOML table.
+    prefix : str
+        Dotted path of the table, used in error messages.
+    base_dir : Path
+        Directory against which relative file names in the table are resolved.
+    """
+
+    def __init__(self, data: dict, prefix: str, base_dir: Path | None = None):
+        if not isinstance(data, dict):
+            raise CaseError(prefix, "must be a table")
+        self.data = data
+        self.prefix = prefix
+        self.base_dir = base_dir or Path.cwd()
+        self._used: set[str] = set()
+
+    # -- bookkeeping -------------------------------------------------------------------
+    def key(self, key: str) -> str:
+        """Full dotted name of ``key``, for error messages."""
+        return _join(self.prefix, key)
+
+    def error(self, key: str, problem: str) -> CaseError:
+        return CaseError(self.key(key), problem)
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def _get(self, key: str, default: Any) -> Any:
+        self._used.add(key)
+        if key in self.data:
+            return self.data[key]
+        if default is _MISSING:
+            raise self.error(key, "required key is missing")
+        return default
+
+    def finish(self) -> None:
+        """Refuse keys that were never read (typos, keys of another model)."""
+        unknown = sorted(set(self.data) - self._used)
+        if unknown:
+            raise self.error(unknown[0], "unknown key" + _did_you_mean(unknown[0], self._used))
+
+    # -- scalars -------------------------------------------------------------------------
+    def float(
+        self,
+        key: str,
+        default: Any = _MISSING,
+        *,
+        gt: float | None = None,
+        ge: float | None = None,
+        lt: float | None = None,
+        le: float | None = None,
+    ) -> float:
+        """A finite real number, optionally bounded."""
+        raw = self._get(key, default)
+        if raw is None:
+            return None  # type: ignore[return-value]
+        if isinstance(raw, bool) or not isinstance(raw, int | float):
+            raise self.error(key, f"must be a number, got {raw!r}")
+        value = float(raw)
+        if not math.isfinite(value):
+            raise self.error(key, f"must be finite, got {value}")
+        _check_bounds(self, key, np.array([value]), gt, ge, lt, le)
+        return value
+
+    def int(self, key: str, default: Any = _MISSING, *, ge: int | None = None,
+            le: int | None = None) -> int:
+        """An integer, optionally bounded."""
+        raw = self._get(key, default)
+        if isinstance(raw, bool) or not isinstance(raw, int):
+            raise self.error(key, f"must be an integer, got {raw!r}")
+        _check_bounds(self, key, np.array([raw]), None, ge, None, le)
+        return int(raw)
+
+    def bool(self, key: str, default: Any = _MISSING) -> bool:
+        raw = self._get(key, default)
+        if not isinstance(raw, bool):
+            raise self.error(key, f"must be true or false, got {raw!r}")
+        return raw
+
+    def string(self, key: str, default: Any = _MISSING, *,
+               choices: Sequence[str] | None = None) -> str:
+        """A string, optionally one of ``choices``."""
+        raw = self._get(key, default)
+        if not isinstance(raw, str):
+            raise self.error(key, f"must be a string, got {raw!r}")
+        if choices is not None and raw not in choices:
+            raise self.error(key, f"must be one of {', '.join(map(repr, choices))}; got {raw!r}"
+                             + _did_you_mean(raw, choices))
+        return raw
+
+    def path(self, key: str, default: Any = _MISSING, *, must_exist: bool = True) -> Path:
+        """A file name, resolved relative to the case file's directory."""
+        raw = self.string(key, default)
+        p = Path(raw)
+        if not p.is_absolute():
+            p = self.base_dir / p
+        if must_exist and not p.exists():
+            raise self.error(key, f"file not found: {p}")
+        return p
+
+    # -- arrays --------------------------------------------------------------------------
+    def array(
+        self,
+        key: str,
+        default: Any = _MISSING,
+        *,
+        shape: tuple[int | None, ...] | None = None,
+        gt: float | None = None,
+        ge: float | None = None,
+        lt: float | None = None,
+        le: float | None = None,
+        scalar_ok: bool = False,
+    ) -> np.ndarray:
+        """A finite float array.
+
+        ``shape`` gives the expected shape; ``None`` entries accept any length. With
+        ``scalar_ok`` a bare number is broadcast to ``shape`` (which must then be fully known).
+        """
+        raw = self._get(key, default)
+        return self.coerce_array(key, raw, shape=shape, gt=gt, ge=ge, lt=lt, le=le,
+                                 scalar_ok=scalar_ok)
+
+    def coerce_array(self, key, raw, *, shape=None, gt=None, ge=None, lt=None, le=None,
+                     scalar_ok=False) -> np.ndarray:
+        """Convert an already-read value to a checked float array (see :meth:`array`)."""
+        if raw is None:
+            return None  # type: ignore[return-value]
+        try:
+            arr = np.asarray(raw, dtype=float)
+        except (TypeError, ValueError):
+            raise self.error(key, "must be a number or a (nested) list of numbers "
+                             "with equal-length rows") from None
+        if scalar_ok and arr.ndim == 0 and shape is not None and None not in shape:
+            arr = np.full(shape, float(arr))
+        if shape is not None:
+            if arr.ndim != len(shape) or any(
+                want is not None and got != want for got, want in zip(arr.shape, shape, strict=False)
+            ):
+                want = "×".join("n" if s is None else str(s) for s in shape) or "scalar"
+                got = "×".join(map(str, arr.shape)) or "scalar"
+                raise self.error(key, f"wrong shape: expected {want}, got {got}")
+        if not np.all(np.isfinite(arr)):
+            raise self.error(key, "must contain only finite numbers (found nan or inf)")
+        _check_bounds(self, key, arr, gt, ge, lt, le)
+        return arr
+
+    # -- nested tables -------------------------------------------------------------------
+    def table(self, key: str, default: Any = _MISSING) -> Section | None:
+        raw = self._get(key, default)
+        if raw is None:
+            return None
+        if not isinstance(raw, dict):
+            raise self.error(key, "must be a table")
+        return Section(raw, self.key(key), self.base_dir)
+
+    def tables(self, key: str, default: Any = _MISSING) -> list[Section]:
+        """An array of tables (``[[key]]`` in TOML)."""
+        raw = self._get(key, default)
+        if raw is None:
+            return []
+        if not isinstance(raw, list) or not all(isinstance(t, dict) for t in raw):
+            raise self.error(key, "must be an array of tables ([[...]] in TOML)")
+        return [Section(t, f"{self.key(key)}[{i}]", self.base_dir) for i, t in enumerate(raw)]
+
+
+def _check_bounds(section: Section, key: str, arr: np.ndarray, gt, ge, lt, le) -> None:
+    checks = (
+        (gt, lambda a, b: a > b, ">"),
+        (ge, lambda a, b: a >= b, ">="),
+        (lt, lambda a, b: a < b, "<"),
+        (le, lambda a, b: a <= b, "<="),
+    )
+    for bound, ok, sym in checks:
+        if bound is None:
+            continue
+        bad = ~ok(arr, bound)
+        if np.any(bad):
+            worst = arr[bad].flat[0]
+            raise section.error(key, f"must be {sym} {bound:g}, got {worst:g}")
+
+
+def _did_you_mean(word: str, candidates) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(word, list(candidates), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+@dataclass(frozen=True)
+class Case:
+    """A parsed case file.
+
+    Attributes
+    ----------
+    model : str
+        The model named at the top level.
+    data : dict
+        The whole TOML document.
+    text : str
+        The case file as written; embedded in every result as metadata.
+    path : Path or None
+        Where the case was read from (None for embedded cases).
+    """
+
+    model: str
+    data: dict
+    text: str
+    path: Path | None = None
+    _sections: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def base_dir(self) -> Path:
+        return self.path.parent if self.path is not None else Path.cwd()
+
+    def section(self, name: str, *, required: bool = True) -> Section | None:
+        """The validating reader of a top-level table (the same object on each call)."""
+        if name not in self._sections:
+            if name not in self.data:
+                if required:
+                    raise CaseError(name, f"required table [{name}] is missing")
+                self._sections[name] = Section({}, name, self.base_dir)
+            else:
+                self._sections[name] = Section(self.data[name], name, self.base_dir)
+        return self._sections[name]
+
+    def finish(self) -> None:
+        """Refuse unknown top-level keys and unknown keys in every table that was read."""
+        allowed = {"model", "title", "description"} | set(self._sections)
+        for key in self.data:
+            if key not in allowed:
+                raise CaseError(key, "unknown top-level key or table"
+                                + _did_you_mean(key, allowed))
+        for sec in self._sections.values():
+            sec.finish()
+
+
+def parse_case_text(text: str, path: Path | None = None, models: Sequence[str] | None = None
+                    ) -> Case:
+    """Parse TOML text into a :class:`Case` (checks only the ``model`` key)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError("", f"case file is not valid TOML: {exc}") from None
+    model = data.get("model", _MISSING)
+    if model is _MISSING:
+        raise CaseError("model", "required key is missing (e.g. model = \"halfspace\")")
+    if not isinstance(model, str):
+        raise CaseError("model", f"must be a string, got {model!r}")
+    if models is not None and model not in models:
+        raise CaseError("model", f"unknown model {model!r}; known: {', '.join(models)}"
+                        + _did_you_mean(model, models))
+    return Case(model=model, data=data, text=text, path=path)
+
+
+def read_case(path: str | Path, models: Sequence[str] | None = None) -> Case:
+    """Read a TOML case file. Raises :class:`CaseError` for unreadable or invalid files."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise CaseError("", f"cannot read case file {path}: {exc.strerror}") from None
+    return parse_case_text(text, path.resolve(), models)

@@ -1,0 +1,141 @@
+"""Writing results: ``summary.json``, ``result.nc`` and ``figures/*.png`` (SPEC §6).
+
+Outputs are staged in a temporary directory beside the target and moved into place only
+when every file has been written, so a run that fails leaves nothing that looks like a
+result. Every output carries the case text, the slipcycle version and units.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from slipcycle import __version__
+
+__all__ = ["RunOutputs", "write_outputs", "provenance", "to_jsonable"]
+
+RESULT_FILES = ("summary.json", "result.nc", "figures")
+
+
+@dataclass
+class RunOutputs:
+    """Everything one analysis writes.
+
+    Attributes
+    ----------
+    summary : dict
+        The numbers a user quotes (JSON-serialisable after :func:`to_jsonable`).
+    dataset : xarray.Dataset or None
+        Full histories; every variable should carry a ``units`` attribute.
+    figures : dict of str to callable
+        Figure name -> function returning a matplotlib Figure. Called at write time so
+        figures are drawn only once the numbers exist.
+    extra_files : dict of str to callable
+        Relative path -> function ``f(path)`` writing an additional file (e.g. a report).
+    """
+
+    summary: dict
+    dataset: xr.Dataset | None = None
+    figures: dict[str, Callable[[], Any]] = field(default_factory=dict)
+    extra_files: dict[str, Callable[[Path], None]] = field(default_factory=dict)
+
+
+def provenance(case_text: str | None, case_path: Path | None = None) -> dict:
+    """Metadata attached to every result: version, case text, time."""
+    return {
+        "slipcycle_version": __version__,
+        "case_file": str(case_path) if case_path else "",
+        "case": case_text or "",
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "units": "SI (N, m, Pa, J, rad, s)",
+    }
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Convert NumPy scalars/arrays (recursively) to JSON types; non-finite floats to None."""
+    if isinstance(obj, Mapping):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return to_jsonable(obj.item())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | None = None,
+                  case_path: Path | None = None) -> Path:
+    """Write ``outputs`` to ``out_dir`` atomically.
+
+    Files are written into a staging directory next to ``out_dir`` and then renamed into
+    place. If anything fails, the staging directory is removed and ``out_dir`` keeps
+    whatever it held before (previous result files are only replaced on success).
+
+    Returns
+    -------
+    Path
+        ``out_dir``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir = Path(out_dir)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    meta = provenance(case_text, case_path)
+    stage = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.partial-", dir=out_dir.parent))
+    try:
+        summary = dict(outputs.summary)
+        summary["metadata"] = {k: v for k, v in meta.items() if k != "case"}
+        (stage / "summary.json").write_text(
+            json.dumps(to_jsonable(summary), indent=2, allow_nan=False) + "\n", encoding="utf-8"
+        )
+        if outputs.dataset is not None:
+            ds = outputs.dataset.copy()
+            ds.attrs.update({k: v for k, v in meta.items()})
+            ds.to_netcdf(stage / "result.nc")
+        if outputs.figures:
+            (stage / "figures").mkdir()
+            for name, make in outputs.figures.items():
+                fig = make()
+                fig.savefig(stage / "figures" / f"{name}.png", dpi=120)
+                plt.close(fig)
+        for rel, writer in outputs.extra_files.items():
+            target = stage / rel
+            target.parent.mkdir(parents=True, exist_ok=True)
+            writer(target)
+        _commit(stage, out_dir)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return out_dir
+
+
+def _commit(stage: Path, out_dir: Path) -> None:
+    """Move staged entries into ``out_dir``, replacing older result entries of the same name."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    for entry in sorted(stage.iterdir()):
+        target = out_dir / entry.name
+        if target.is_dir() and not target.is_symlink():
+            old = target.with_name(f".{target.name}.old-{os.getpid()}")
+            target.rename(old)
+            entry.rename(target)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(entry, target)

@@ -1,0 +1,12 @@
+"""Periodic loads and assembly protocols (SPEC §1)."""
+
+from slipcycle.loading.periodic import (
+    HarmonicLoad,
+    PeriodicLoad,
+    TabulatedLoad,
+    cycle_angles,
+    piecewise_linear_path,
+)
+
+__all__ = ["HarmonicLoad", "PeriodicLoad", "TabulatedLoad", "cycle_angles",
+           "piecewise_linear_path"]
