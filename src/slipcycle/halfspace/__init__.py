@@ -1,0 +1,27 @@
+"""Uncoupled half-space contacts: Cattaneo–Mindlin / Ciavarella–Jäger microslip (SPEC §4).
+
+Data flow: a :class:`~slipcycle.halfspace.profiles.Profile` (the normal law P(U)) becomes a
+:class:`~slipcycle.halfspace.bed.SliderBed` (independent Coulomb sliders indexed by the
+approach at which they touch); :func:`~slipcycle.halfspace.history.run_history` drives the
+bed along a load path; :mod:`~slipcycle.halfspace.tractions` turns slider line loads into
+traction and dissipation distributions for axisymmetric profiles; :mod:`~.wmap` computes
+the dimensionless rough-surface dissipation Ŵ(P̂1, Q̂1, φ).
+"""
+
+from slipcycle.halfspace.bed import SliderBed, make_bed
+from slipcycle.halfspace.elastic import ContactElasticity
+from slipcycle.halfspace.history import HistoryResult, run_history
+from slipcycle.halfspace.profiles import (
+    Cylinder2D,
+    FlatPunch,
+    PowerLaw,
+    Profile,
+    RoughExponential,
+    Tabulated,
+    sphere,
+)
+
+__all__ = [
+    "ContactElasticity", "Cylinder2D", "FlatPunch", "HistoryResult", "PowerLaw", "Profile",
+    "RoughExponential", "SliderBed", "Tabulated", "make_bed", "run_history", "sphere",
+]

@@ -1,0 +1,228 @@
+"""Normal force–approach laws P(U) of the contact profiles of SPEC §4.
+
+A profile is described by its approach U(P) and incremental normal compliance
+C(P) = dU/dP, both as functions of the normal load P (N, or N/m for plane problems), and,
+where defined, the contact size a(P) (radius, or half-width in 2-D). Everything the slider
+bed needs follows from these: the slider density k(s) = d²P/dU² and, for axisymmetric
+profiles, the radius at which a slider of level s sits, a(P(s)) (method of dimensionality
+reduction, Popov & Heß 2015).
+
+A profile may instead describe itself exactly by a finite set of sliders
+(:meth:`Profile.concentrated`): the flat punch (one level) and tabulated P(U) (one slider per
+change of slope).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from scipy.special import gamma
+
+__all__ = ["Profile", "PowerLaw", "sphere", "Cylinder2D", "FlatPunch", "RoughExponential",
+           "Tabulated"]
+
+
+class Profile(Protocol):
+    """What a contact profile must provide (all functions vectorised over P)."""
+
+    plane: bool          # 2-D problem: loads per unit length
+    axisymmetric: bool   # tractions by Abel transform are available
+
+    def approach(self, P: np.ndarray) -> np.ndarray:
+        """Rigid-body approach U(P) in m."""
+
+    def compliance(self, P: np.ndarray) -> np.ndarray:
+        """Incremental normal compliance C(P) = dU/dP in m/N."""
+
+    def contact_size(self, P: np.ndarray) -> np.ndarray | None:
+        """Contact radius (3-D) or half-width (2-D) a(P) in m; None if undefined."""
+
+    def concentrated(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Exact slider set (levels in m, normal stiffnesses in N/m), or None."""
+
+
+@dataclass(frozen=True)
+class PowerLaw:
+    """Axisymmetric power-law profile z = c rⁿ pressed by E* (3-D).
+
+    By the method of dimensionality reduction the equivalent 1-D profile is
+    g(x) = κ_n c |x|ⁿ with κ_n = √π Γ(n/2 + 1)/Γ(n/2 + 1/2), so that
+    a(U) = (U/(κ_n c))^{1/n} and P(U) = 2E* U a n/(n + 1)  (Popov & Heß 2015, §3).
+    The sphere of radius R is n = 2, c = 1/(2R): a² = RU, P = (4/3)E* R^{1/2} U^{3/2}.
+    """
+
+    c: float
+    n: float
+    contact_modulus: float
+    plane: bool = False
+    axisymmetric: bool = True
+
+    @property
+    def kappa(self) -> float:
+        return math.sqrt(math.pi) * gamma(self.n / 2 + 1) / gamma(self.n / 2 + 0.5)
+
+    def _a_from_P(self, P):
+        # P = 2E* κ c a^{n+1} n/(n+1)
+        P = np.maximum(np.asarray(P, float), 0.0)
+        coef = 2 * self.contact_modulus * self.kappa * self.c * self.n / (self.n + 1)
+        return (P / coef) ** (1.0 / (self.n + 1))
+
+    def contact_size(self, P):
+        return self._a_from_P(P)
+
+    def approach(self, P):
+        return self.kappa * self.c * self._a_from_P(P) ** self.n
+
+    def compliance(self, P):
+        # dP/dU = 2E* a
+        with np.errstate(divide="ignore"):
+            return 1.0 / (2 * self.contact_modulus * self._a_from_P(P))
+
+    def concentrated(self):
+        return None
+
+
+def sphere(radius: float, contact_modulus: float) -> PowerLaw:
+    """Hertzian sphere of radius R (m): z = r²/(2R)."""
+    return PowerLaw(c=1.0 / (2.0 * radius), n=2.0, contact_modulus=contact_modulus)
+
+
+@dataclass(frozen=True)
+class Cylinder2D:
+    """Plane Hertzian contact of a cylinder of radius R, loads per unit length.
+
+    Half-width a = (4PR/(πE*))^{1/2}. Plane displacements need a reference point; with a
+    point at depth d below the surface on the axis of symmetry the approach is
+    U = (P/(πE*)) [ln(4d²/a²) − 1] (Johnson 1985, eq. 5.41 form), so the incremental
+    compliance C = (ln(4d²/a²) − 2)/(πE*). The dissipation does not depend on d (seed 001
+    §4.5); d defaults to R. Valid while C > 0, i.e. a < 2d/e.
+    """
+
+    radius: float
+    contact_modulus: float
+    reference_depth: float | None = None
+    plane: bool = True
+    axisymmetric: bool = False
+
+    @property
+    def d(self) -> float:
+        return self.reference_depth if self.reference_depth is not None else self.radius
+
+    def contact_size(self, P):
+        P = np.maximum(np.asarray(P, float), 0.0)
+        return np.sqrt(4 * P * self.radius / (math.pi * self.contact_modulus))
+
+    def approach(self, P):
+        P = np.maximum(np.asarray(P, float), 0.0)
+        a = self.contact_size(P)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            U = P / (math.pi * self.contact_modulus) * (np.log(4 * self.d**2 / a**2) - 1)
+        return np.where(P > 0, U, 0.0)
+
+    def compliance(self, P):
+        a = self.contact_size(P)
+        with np.errstate(divide="ignore"):
+            return (np.log(4 * self.d**2 / a**2) - 2) / (math.pi * self.contact_modulus)
+
+    def max_load(self) -> float:
+        """Largest P with positive compliance (a = 2d/e)."""
+        a = 2 * self.d / math.e
+        return math.pi * self.contact_modulus * a**2 / (4 * self.radius)
+
+    def concentrated(self):
+        return None
+
+
+@dataclass(frozen=True)
+class FlatPunch:
+    """Rigid flat circular punch of radius a (3-D): P = 2E* a U (Boussinesq)."""
+
+    radius: float
+    contact_modulus: float
+    plane: bool = False
+    axisymmetric: bool = True
+
+    def contact_size(self, P):
+        return np.full_like(np.asarray(P, float), self.radius)
+
+    def approach(self, P):
+        return np.asarray(P, float) / (2 * self.contact_modulus * self.radius)
+
+    def compliance(self, P):
+        return np.full_like(np.asarray(P, float), 1 / (2 * self.contact_modulus * self.radius))
+
+    def concentrated(self):
+        return np.array([0.0]), np.array([2 * self.contact_modulus * self.radius])
+
+
+@dataclass(frozen=True)
+class RoughExponential:
+    """Nominally flat rough contact with dP/dU = P/(γσ) (seed 001 eq. 10, Akarapu et al.).
+
+    P = P_ref exp(U/γσ); the approach is measured from the level where P = P_ref (1 N by
+    default; the choice does not affect anything physical).
+    """
+
+    gamma_sigma: float
+    reference_load: float = 1.0
+    plane: bool = False
+    axisymmetric: bool = False
+
+    def contact_size(self, P):
+        return None
+
+    def approach(self, P):
+        with np.errstate(divide="ignore"):
+            return self.gamma_sigma * np.log(np.asarray(P, float) / self.reference_load)
+
+    def compliance(self, P):
+        with np.errstate(divide="ignore"):
+            return self.gamma_sigma / np.asarray(P, float)
+
+    def concentrated(self):
+        return None
+
+
+@dataclass(frozen=True)
+class Tabulated:
+    """Measured or computed P(U) pairs, linear between points (and beyond the last one).
+
+    The slider set is exact: one slider at each tabulated approach where the slope
+    increases, with stiffness equal to the increase. P(U) must be convex (non-decreasing
+    slope), start at P = 0, and increase.
+    """
+
+    U: np.ndarray
+    P: np.ndarray
+    plane: bool = False
+    axisymmetric: bool = False
+
+    def __post_init__(self):
+        U, P = np.asarray(self.U, float), np.asarray(self.P, float)
+        object.__setattr__(self, "U", U)
+        object.__setattr__(self, "P", P)
+
+    @property
+    def slopes(self) -> np.ndarray:
+        return np.diff(self.P) / np.diff(self.U)
+
+    def contact_size(self, P):
+        return None
+
+    def approach(self, P):
+        P = np.asarray(P, float)
+        U_lin = self.U[-1] + (P - self.P[-1]) / self.slopes[-1]
+        return np.where(P <= self.P[-1], np.interp(P, self.P, self.U), U_lin)
+
+    def compliance(self, P):
+        idx = np.clip(np.searchsorted(self.P, np.asarray(P, float), side="right") - 1, 0,
+                      self.slopes.size - 1)
+        return 1.0 / self.slopes[idx]
+
+    def concentrated(self):
+        jumps = np.diff(np.concatenate([[0.0], self.slopes]))
+        keep = jumps > 0
+        return self.U[:-1][keep], jumps[keep]

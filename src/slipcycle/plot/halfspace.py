@@ -1,0 +1,134 @@
+"""Figures of half-space runs; each function takes the result Dataset, returns a Figure."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+__all__ = ["hysteresis", "load_path", "tractions", "dissipation_density", "stick_zone",
+           "w_hat_vs_phase", "w_hat_cubic_law"]
+
+
+def _last_cycle(ds: xr.Dataset) -> xr.Dataset:
+    return ds.isel(step=np.flatnonzero(ds.cycle.values == ds.cycle.values.max()))
+
+
+def hysteresis(ds: xr.Dataset) -> Figure:
+    """Tangential load Q against displacement V: assembly and the last cycle."""
+    fig = Figure(figsize=(5.5, 4.2))
+    ax = fig.add_subplot()
+    asm = ds.isel(step=np.flatnonzero(ds.cycle.values < 0))
+    last = _last_cycle(ds)
+    ax.plot(asm.V * 1e6, asm.Q, color="0.6", lw=1, label="assembly")
+    ax.plot(last.V * 1e6, last.Q, color="C0", lw=1.8, label="last cycle")
+    W = float(ds.dissipation.values[-1]) if ds.sizes.get("cycle_run", 0) else float("nan")
+    ax.set_title(f"Hysteresis loop  (∮Q dV = {W:.4g} {ds.dissipation.attrs['units']})")
+    ax.set_xlabel("tangential displacement V [µm]")
+    ax.set_ylabel(f"tangential load Q [{ds.Q.attrs['units']}]")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    return fig
+
+
+def load_path(ds: xr.Dataset, friction: float) -> Figure:
+    """Load path in the P–Q plane with the friction cone |Q| = fP."""
+    fig = Figure(figsize=(5.5, 4.2))
+    ax = fig.add_subplot()
+    Pmax = float(ds.P.max()) * 1.1
+    ax.fill_between([0, Pmax], [0, friction * Pmax], [0, -friction * Pmax], color="C2",
+                    alpha=0.08, label=f"partial slip |Q| < fP (f = {friction:g})")
+    asm = ds.isel(step=np.flatnonzero(ds.cycle.values < 0))
+    last = _last_cycle(ds)
+    ax.plot(asm.P, asm.Q, color="0.6", lw=1, label="assembly")
+    ax.plot(last.P, last.Q, color="C0", lw=1.8, label="periodic cycle")
+    ax.set_xlabel(f"normal load P [{ds.P.attrs['units']}]")
+    ax.set_ylabel(f"tangential load Q [{ds.Q.attrs['units']}]")
+    ax.set_xlim(0, Pmax)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def tractions(ds: xr.Dataset) -> Figure:
+    """Pressure and shear traction over the radius at the snapshot instants."""
+    fig = Figure(figsize=(6.5, 4.4))
+    ax = fig.add_subplot()
+    r = ds.radius.values * 1e3
+    for i, th in enumerate(ds.snapshot_theta.values):
+        color = f"C{i}"
+        ax.plot(r, ds.shear_traction.values[i] / 1e6, color=color, lw=1.6,
+                label=f"q, θ = {th:.2f} rad")
+        ax.plot(r, ds.pressure.values[i] / 1e6, color=color, lw=0.8, ls="--")
+    ax.axhline(0, color="k", lw=0.5)
+    ax.set_xlabel("radius r [mm]")
+    ax.set_ylabel("traction [MPa]  (dashed: pressure p)")
+    ax.set_title("Shear traction q(r) and pressure p(r) in the last cycle")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def dissipation_density(ds: xr.Dataset) -> Figure:
+    """Local dissipation per unit area W(r) over the last cycle."""
+    fig = Figure(figsize=(5.5, 4.0))
+    ax = fig.add_subplot()
+    ax.plot(ds.radius * 1e3, ds.dissipation_density, color="C3")
+    if "stick_size" in ds:
+        c = float(_last_cycle(ds).stick_size.min()) * 1e3
+        ax.axvline(c, color="0.4", ls=":", label=f"permanent stick radius {c:.3g} mm")
+        ax.legend()
+    ax.set_xlabel("radius r [mm]")
+    ax.set_ylabel("W(r) [J/m²]")
+    ax.set_title("Local frictional dissipation per cycle")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def stick_zone(ds: xr.Dataset) -> Figure:
+    """Stick-zone size against the cycle angle in the last cycle."""
+    fig = Figure(figsize=(5.5, 3.6))
+    ax = fig.add_subplot()
+    last = _last_cycle(ds)
+    ax.plot(last.theta, last.stick_size * 1e3, label="stick zone")
+    ax.set_xlabel("cycle angle θ [rad]")
+    ax.set_ylabel("stick radius / half-width [mm]")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def w_hat_vs_phase(ds: xr.Dataset, P1_hat: float) -> Figure:
+    """Ŵ against the phase φ for several Q̂1 at fixed P̂1 (seed 001 Fig. 7)."""
+    fig = Figure(figsize=(6.0, 4.2))
+    ax = fig.add_subplot()
+    sub = ds.W_hat.sel(P1_hat=P1_hat, method="nearest")
+    for q in sub.Q1_hat.values:
+        ax.plot(sub.phase, sub.sel(Q1_hat=q), label=f"Q̂1 = {q:.2g}")
+    ax.set_xlabel("phase φ [rad]")
+    ax.set_ylabel("Ŵ = W / (λ γσ f² P0)")
+    ax.set_title(f"Rough-contact dissipation, P̂1 = {float(sub.P1_hat):.2g}")
+    ax.set_xticks(np.pi * np.array([-1, -0.5, 0, 0.5, 1]), ["-π", "-π/2", "0", "π/2", "π"])
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def w_hat_cubic_law(Q1_hat: np.ndarray, W_hat: np.ndarray, label: str) -> Figure:
+    """log–log Ŵ against Q̂1 with the small-amplitude law (2/3) Q̂1³."""
+    fig = Figure(figsize=(5.5, 4.2))
+    ax = fig.add_subplot()
+    ax.loglog(Q1_hat, W_hat, "o-", label=label)
+    ax.loglog(Q1_hat, 2 / 3 * Q1_hat**3, "k--", label="(2/3) Q̂1³")
+    ax.set_xlabel("Q̂1 = Q1 / (f P0)")
+    ax.set_ylabel("Ŵ")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend()
+    fig.tight_layout()
+    return fig
