@@ -1,0 +1,116 @@
+"""``slipcycle map CASE.toml --out DIR``: rough-surface dissipation map Ŵ(P̂1, Q̂1, φ).
+
+The case names ``model = "halfspace"`` and holds a ``[map]`` table whose keys ``P1_hat``,
+``Q1_hat`` and ``phase`` are each a list of values or a table ``{start, stop, num}``; the
+optional ``fig7_P1_hat`` (default 0.4) and ``fig7_Q1_hat`` (default [0.2, 0.4, 0.6, 0.8])
+select the curves of seed 001 Fig. 7, and ``[run]`` may set ``steps_per_cycle`` and
+``sliders``. A ``[halfspace]`` table, if present, is only used to convert Ŵ to physical
+dissipation W = λ_c γσ f² P0 Ŵ for its rough profile and ``[loading].P0``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("map", help="rough-contact dissipation map W_hat(P1_hat, Q1_hat, phase)",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("case", type=Path, help="TOML case file with a [map] table")
+    p.add_argument("--out", type=Path, required=True, help="output directory")
+    p.set_defaults(execute=execute)
+
+
+def _axis(sec, key, default, lo, hi):
+    raw = sec.data.get(key, default)
+    if isinstance(raw, dict):
+        sub = sec.table(key)
+        vals = np.linspace(sub.float("start", ge=lo, le=hi), sub.float("stop", ge=lo, le=hi),
+                           sub.int("num", ge=1, le=100000))
+        sub.finish()
+        return vals
+    return np.atleast_1d(sec.coerce_array(key, sec._get(key, default), shape=None, ge=lo,
+                                          le=hi)).ravel()
+
+
+def parse_map_case(case):
+    """Grid and settings of a map case (raises CaseError)."""
+    sec = case.section("map")
+    P1 = _axis(sec, "P1_hat", {"start": 0.0, "stop": 0.8, "num": 9}, 0.0, 0.999999)
+    Q1 = _axis(sec, "Q1_hat", {"start": 0.05, "stop": 0.95, "num": 19}, 0.0, 1.0)
+    ph = _axis(sec, "phase", {"start": -np.pi, "stop": np.pi, "num": 37}, -2 * np.pi, 2 * np.pi)
+    fig_P1 = sec.float("fig7_P1_hat", 0.4, ge=0.0, lt=1.0)
+    fig_Q1 = np.atleast_1d(sec.array("fig7_Q1_hat", [0.2, 0.4, 0.6, 0.8], ge=0.0, le=1.0))
+    run = case.section("run", required=False)
+    settings = {"steps_per_cycle": run.int("steps_per_cycle", 200, ge=16),
+                "n_sliders": run.int("sliders", 100, ge=10, le=100000)}
+    # ignore the physical tables except for unit conversion
+    for name in ("halfspace", "loading"):
+        if name in case.data:
+            case.section(name).data.clear()
+    case.finish()
+    return P1, Q1, ph, fig_P1, fig_Q1, settings
+
+
+def execute(args: argparse.Namespace) -> int:
+    import xarray as xr
+
+    from slipcycle.halfspace.wmap import w_hat_map
+    from slipcycle.io import RunOutputs, read_case, write_outputs
+    from slipcycle.plot.halfspace import w_hat_cubic_law, w_hat_vs_phase
+
+    case = read_case(args.case, models=["halfspace"])
+    P1, Q1, ph, fig_P1, fig_Q1, settings = parse_map_case(case)
+    t0 = time.perf_counter()
+    print(f"computing W_hat on {P1.size} x {Q1.size} x {ph.size} = {P1.size * Q1.size * ph.size}"
+          " points ...", flush=True)
+    W = w_hat_map(P1, Q1, ph, **settings)
+    # Fig. 7 curves and the cubic law on their own fine grids
+    fig_phase = np.linspace(-np.pi, np.pi, 73)
+    W7 = w_hat_map([fig_P1], fig_Q1, fig_phase, **settings)[0]
+    q_small = np.geomspace(0.01, 0.5, 12)
+    W_small = w_hat_map([0.0], q_small, [0.0], **settings)[0, :, 0]
+    elapsed = time.perf_counter() - t0
+    slope = float(np.polyfit(np.log(q_small[:5]), np.log(W_small[:5]), 1)[0])
+    attrs = {"units": "1", "long_name": "W / (lambda_c gamma_sigma f^2 P0)"}
+    ds = xr.Dataset(
+        {"W_hat": (("P1_hat", "Q1_hat", "phase"), W, attrs)},
+        coords={"P1_hat": P1, "Q1_hat": Q1, "phase": ("phase", ph, {"units": "rad"})},
+    )
+    fig7 = xr.Dataset({"W_hat": (("P1_hat", "Q1_hat", "phase"), W7[None], attrs)},
+                      coords={"P1_hat": [fig_P1], "Q1_hat": fig_Q1, "phase": fig_phase})
+    ds["fig7_W_hat"] = (("fig7_Q1_hat", "fig7_phase"), W7, attrs)
+    ds = ds.assign_coords(fig7_Q1_hat=fig_Q1, fig7_phase=("fig7_phase", fig_phase,
+                                                          {"units": "rad"}))
+    i_max = np.nanargmax(W7, axis=1)
+    summary = {
+        "model": "halfspace",
+        "analysis": "w_hat_map",
+        "grid_points": int(W.size),
+        "gross_slip_points": int(np.isnan(W).sum()),
+        "wall_time_s": elapsed,
+        "settings": settings,
+        "cubic_law_slope": slope,
+        "fig7_P1_hat": fig_P1,
+        "fig7_phase_of_max": dict(zip(map(str, fig_Q1), fig_phase[i_max].tolist(),
+                                      strict=True)),
+        "fig7_W_hat_max": dict(zip(map(str, fig_Q1), np.nanmax(W7, axis=1).tolist(),
+                                   strict=True)),
+        "dissipation_per_cycle": None,
+        "units": {"W_hat": "1 (W / (lambda_c gamma_sigma f^2 P0))", "phase": "rad"},
+    }
+    outputs = RunOutputs(summary=summary, dataset=ds, figures={
+        "w_hat_vs_phase": lambda: w_hat_vs_phase(fig7, fig_P1),
+        "w_hat_cubic_law": lambda: w_hat_cubic_law(q_small, W_small,
+                                                   f"P̂1 = 0, φ = 0 (slope {slope:.3f})"),
+    })
+    write_outputs(args.out, outputs, case.text, case.path)
+    print(json.dumps({k: summary[k] for k in ("grid_points", "wall_time_s", "cubic_law_slope",
+                                              "fig7_phase_of_max")}, indent=2))
+    print(f"results written to {args.out}/")
+    return 0
