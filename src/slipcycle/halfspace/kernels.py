@@ -88,30 +88,15 @@ def _solve_exact_sorted(t, kt, cap, target, lo, hi):
 
 
 @njit(cache=True)
-def solve_tangential_force(t, kt, cap, target, guess):
-    """ΔV with Σ clip(t + κ ΔV, ±c) = target; assumes |target| < Σ c. Returns (ΔV, passes)."""
-    n = t.size
-    qmax = 0.0
-    lo = np.inf
-    hi = -np.inf
-    for i in range(n):
-        qmax += cap[i]
-        a = (-cap[i] - t[i]) / kt[i]
-        b = (cap[i] - t[i]) / kt[i]
-        if a < lo:
-            lo = a
-        if b > hi:
-            hi = b
+def _newton(t, kt, cap, target, x, r, s, lo, hi, qmax):
+    """Safeguarded Newton on the active set, from x with residual r and slope s."""
     tol = 1e-13 * (qmax + abs(target))
     g_lo = -qmax - target
     g_hi = qmax - target
-    x = min(max(guess, lo), hi)
     side = 0
     for it in range(_MAX_NEWTON):
-        q, s = _force_and_slope(t, kt, cap, x)
-        r = q - target
         if abs(r) <= tol:
-            return x, it + 1
+            return x, it
         if r < 0:
             lo, g_lo = x, r
             if side == -1:
@@ -128,7 +113,34 @@ def solve_tangential_force(t, kt, cap, target, guess):
             if not (lo < xn < hi):
                 xn = 0.5 * (lo + hi)
         x = xn
+        q, s = _force_and_slope(t, kt, cap, x)
+        r = q - target
     return _solve_exact_sorted(t, kt, cap, target, lo, hi), _MAX_NEWTON + 2
+
+
+@njit(cache=True)
+def _bracket(t, kt, cap):
+    """Total capacity and the ΔV at which every slider is at −c (lo) or at +c (hi)."""
+    qmax = 0.0
+    lo = np.inf
+    hi = -np.inf
+    for i in range(t.size):
+        qmax += cap[i]
+        a = (-cap[i] - t[i]) / kt[i]
+        b = (cap[i] - t[i]) / kt[i]
+        lo = min(lo, a)
+        hi = max(hi, b)
+    return qmax, lo, hi
+
+
+@njit(cache=True)
+def solve_tangential_force(t, kt, cap, target, guess):
+    """ΔV with Σ clip(t + κ ΔV, ±c) = target; assumes |target| < Σ c. Returns (ΔV, passes)."""
+    qmax, lo, hi = _bracket(t, kt, cap)
+    x = min(max(guess, lo), hi)
+    q, s = _force_and_slope(t, kt, cap, x)
+    dv, it = _newton(t, kt, cap, target, x, q - target, s, lo, hi, qmax)
+    return dv, it + 2
 
 
 @njit(cache=True)
@@ -170,16 +182,22 @@ def drive(t, z, d, level, kn, kt, friction, U_path, T_path, force_control, V0,
     ke = np.empty(n)
     V = V0
     U_old = U_path[0]
-    dv_prev = 0.0
     r = 0
     passes = 0
     for k in range(U_path.size):
         U = U_path[k]
+        # One sweep sets the limits and everything the first Newton step needs at ΔV = 0:
+        # Σ clip(t, ±c), the stuck stiffness, and the bracket of the root.
         qmax = 0.0
+        q0 = 0.0
+        s0 = 0.0
+        lo = 0.0
+        hi = 0.0
         for i in range(n):
             gap = U - level[i]
-            cap[i] = friction * kn[i] * gap if gap > 0.0 else 0.0
-            qmax += cap[i]
+            c = friction * kn[i] * gap if gap > 0.0 else 0.0
+            cap[i] = c
+            qmax += c
             # A slider touching during the step carries only the displacement after touch
             # (approach taken linear within the step), so it enters with no force.
             old_gap = U_old - level[i]
@@ -187,13 +205,24 @@ def drive(t, z, d, level, kn, kt, friction, U_path, T_path, force_control, V0,
                 ke[i] = kt[i] * gap / (gap - old_gap)
             else:
                 ke[i] = kt[i]
+            ti = t[i]
+            if ti >= c:
+                q0 += c
+            elif ti <= -c:
+                q0 -= c
+            else:
+                q0 += ti
+                s0 += ke[i]
+            lo = min(lo, (-c - ti) / ke[i])
+            hi = max(hi, (c - ti) / ke[i])
         U_old = U
+        passes += 1
         if force_control:
             target = T_path[k]
             if target != 0.0 and abs(target) >= qmax * (1.0 - 1e-12):
                 return k, passes
             if qmax > 0.0:
-                dv, p = solve_tangential_force(t, ke, cap, target, dv_prev)
+                dv, p = _newton(t, ke, cap, target, 0.0, q0 - target, s0, lo, hi, qmax)
                 passes += p
             else:
                 dv = 0.0  # nothing in contact and no load: nothing moves
@@ -224,11 +253,10 @@ def drive(t, z, d, level, kn, kt, friction, U_path, T_path, force_control, V0,
             z[i] += dz
             t[i] = tn
             q += tn
-        passes += 2
+        passes += 1
         if not force_control and n_slip > 0 and abs(q) >= qmax * (1.0 - 1e-12):
             return k, passes  # every slider in contact slides: gross slip
         V += dv
-        dv_prev = dv
         V_out[k] = V
         Q_out[k] = q
         first_slip_out[k] = first
