@@ -57,7 +57,8 @@ def test_gross_slip_is_reported_with_time_and_loads(run_cli, write_case, tmp_pat
 
 
 BAD = [
-    ("unknown", GOOD.replace("friction = 0.5", "friction = 0.5\nfricton = 0.3"), "halfspace.fricton"),
+    ("unknown", GOOD.replace("friction = 0.5", "friction = 0.5\nfricton = 0.3"),
+     "halfspace.fricton"),
     ("missing", GOOD.replace("radius = 0.01\n", ""), "halfspace.radius"),
     ("negative f", GOOD.replace("friction = 0.5", "friction = -0.5"), "halfspace.friction"),
     ("shape", GOOD.replace("E = [200e9, 200e9]", "E = [200e9]"), "halfspace.E"),

@@ -156,20 +156,32 @@ def run_history(
         passes += p
         return status, V_out, Q_out, first, rec_t, rec_z
 
+    def record(U_path, V_out, Q_out, first, theta, cycle, stop):
+        """Append the steps actually taken (up to ``stop``) to the histories."""
+        Us.append(U_path[:stop])
+        Vs.append(V_out[:stop])
+        Qs.append(Q_out[:stop])
+        firsts.append(first[:stop])
+        thetas.append(theta[:stop])
+        cyc.append(np.full(min(stop, U_path.size), cycle))
+
+    def gross_slip_at(k, U_path, T_path, V_out, V_start, cycle, theta):
+        P_k = float(bed.load(U_path[k]))
+        if force_control:
+            Q_k = float(T_path[k])
+        else:  # the bed slides towards the prescribed displacement at its full capacity
+            V_before = V_out[k - 1] if k else V_start
+            Q_k = float(np.sign(T_path[k] - V_before)) * bed.friction * P_k
+        return GrossSlip(int(sum(u.size for u in Us) + k), cycle, theta, P_k, Q_k)
+
     # Assembly starts from the unloaded state: V = 0, all forces zero.
-    status, Va, Qa, fa, _, _ = run(Ua, np.asarray(assembly_tangential, float), 0.0, False)
-    Us.append(Ua)
-    Vs.append(Va)
-    Qs.append(Qa)
-    firsts.append(fa)
-    thetas.append(np.full(Ua.size, np.nan))
-    cyc.append(np.full(Ua.size, -1))
+    At = np.asarray(assembly_tangential, float)
+    status, Va, Qa, fa, _, _ = run(Ua, At, 0.0, False)
     if status != STATUS_OK:
-        k = status
-        P_k = float(bed.load(Ua[k]))
-        T = float(np.asarray(assembly_tangential)[k])
-        gross = GrossSlip(k, -1, float("nan"), P_k, T if force_control else np.sign(T) * bed.friction * P_k)
-    V_prev, Q_prev = (float(Va[-1]), float(Qa[-1])) if Ua.size else (0.0, 0.0)
+        gross = gross_slip_at(status, Ua, At, Va, 0.0, -1, float("nan"))
+    stop = Ua.size if status == STATUS_OK else status
+    record(Ua, Va, Qa, fa, np.full(Ua.size, np.nan), -1, stop)
+    V_prev, Q_prev = (float(Va[stop - 1]), float(Qa[stop - 1])) if stop else (0.0, 0.0)
     theta_c = 2 * np.pi * np.arange(1, S + 1) / S
     Tc = np.asarray(cycle_tangential, float)
     slider_diss, global_diss = [], []
@@ -180,24 +192,10 @@ def run_history(
         t_start, z_start, d_start = t.copy(), z.copy(), d.copy()
         status, Vc, Qc, fc, rt, rz = run(Uc, Tc, V_prev, record_last_cycle)
         if status != STATUS_OK:
-            k = status
-            P_k = float(bed.load(Uc[k]))
-            Q_k = float(Tc[k]) if force_control else float(np.sign(Tc[k] - Vc[k - 1] if k else Tc[k])
-                                                          * bed.friction * P_k)
-            gross = GrossSlip(int(sum(u.size for u in Us) + k), c, float(theta_c[k]), P_k, Q_k)
-            Us.append(Uc[:k])
-            Vs.append(Vc[:k])
-            Qs.append(Qc[:k])
-            firsts.append(fc[:k])
-            thetas.append(theta_c[:k])
-            cyc.append(np.full(k, c))
+            gross = gross_slip_at(status, Uc, Tc, Vc, V_prev, c, float(theta_c[status]))
+            record(Uc, Vc, Qc, fc, theta_c, c, status)
             break
-        Us.append(Uc)
-        Vs.append(Vc)
-        Qs.append(Qc)
-        firsts.append(fc)
-        thetas.append(theta_c)
-        cyc.append(np.full(S, c))
+        record(Uc, Vc, Qc, fc, theta_c, c, S)
         slider_diss.append(d - d_start)
         global_diss.append(_trapezoid_work(Qc, Vc, Q_prev, V_prev))
         if record_last_cycle:

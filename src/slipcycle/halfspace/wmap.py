@@ -6,8 +6,8 @@ P = P0(1 + P̂1 cos θ), Q = f P0 Q̂1 cos(θ − φ) scales as W = λ_c γσ f�
 point runs the same slider bed through a normal preload, a tangential ramp to the start
 of the cycle and two cycles (the second is steady for an uncoupled bed: frictional Melan
 theorem; tests check it against a third). Each point gets its own bed: sliders that stay
-below every stick load of the history are lumped, the rest equally spaced in load. Grid points run in parallel threads (Numba
-``prange``) without Python overhead per point.
+below every stick load of the history are lumped, the rest equally spaced in load. Grid
+points run in parallel threads (Numba ``prange``) without Python overhead per point.
 """
 
 from __future__ import annotations

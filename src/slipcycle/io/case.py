@@ -181,9 +181,9 @@ class Section:
         if scalar_ok and arr.ndim == 0 and shape is not None and None not in shape:
             arr = np.full(shape, float(arr))
         if shape is not None:
-            if arr.ndim != len(shape) or any(
-                want is not None and got != want for got, want in zip(arr.shape, shape, strict=False)
-            ):
+            mismatch = any(want is not None and got != want
+                           for got, want in zip(arr.shape, shape, strict=False))
+            if arr.ndim != len(shape) or mismatch:
                 want = "×".join("n" if s is None else str(s) for s in shape) or "scalar"
                 got = "×".join(map(str, arr.shape)) or "scalar"
                 raise self.error(key, f"wrong shape: expected {want}, got {got}")
