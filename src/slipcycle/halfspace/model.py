@@ -32,7 +32,9 @@ class HalfspaceModel:
     tangential_control : {"force", "displacement"}
     protocol : (S, 2) array
         Assembly states after the unloaded state (normal, tangential); the path continues
-        linearly to the state at θ = 0.
+        linearly to the state at θ = 0. Empty: a straight line from the unloaded state in
+        force control, normal approach first and then the tangential load in approach
+        control.
     steps_per_cycle, max_cycles, n_sliders, assembly_steps : int
     snapshots : (m,) array
         Cycle angles (rad) at which tractions are reported.
@@ -68,7 +70,12 @@ class HalfspaceModel:
         """
         start = np.array([[self.normal(np.zeros(1))[0, 0], self.tangential(np.zeros(1))[0, 0]]])
         zero = np.array([[unloaded_normal, 0.0]])
-        states = np.vstack([zero, self.protocol, start])
+        protocol = self.protocol
+        if self.normal_control == "approach" and protocol.size == 0:
+            # A straight line in (U, Q) would shear a barely loaded contact (P ∝ U^{3/2} for
+            # a sphere) into gross slip: by default approach first, then shear.
+            protocol = np.array([[start[0, 0], 0.0]])
+        states = np.vstack([zero, protocol, start])
         path = piecewise_linear_path(states, self.assembly_steps)[1:]
         return path[:, 0], path[:, 1]
 
