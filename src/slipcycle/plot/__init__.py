@@ -1,0 +1,1 @@
+"""Figures (matplotlib, Agg backend). One module per model."""
