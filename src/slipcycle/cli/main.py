@@ -2,7 +2,9 @@
 
 Each sub-command lives in its own module of this package with two functions,
 ``add_parser(subparsers)`` and ``execute(args) -> int``; :data:`COMMANDS` lists them.
-Invalid input ends with one line ``error: <key>: <problem>`` on stderr and exit code 2.
+Invalid input ends with one line ``error: <key>: <problem>`` on stderr and exit code 2; a
+solver that cannot proceed on a valid model (:class:`~slipcycle.errors.SolverError`) with
+``error: solver: <problem>`` and exit code 3. No result files are left in either case.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from slipcycle import __version__
 COMMANDS = ["run", "demo", "map", "reduce"]
 
 EXIT_BAD_INPUT = 2
+EXIT_SOLVER = 3
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -38,6 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from slipcycle.errors import SolverError
     from slipcycle.io import CaseError
 
     parser = build_parser()
@@ -47,6 +51,9 @@ def main(argv: list[str] | None = None) -> int:
     except CaseError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except SolverError as exc:
+        print(f"error: solver: {exc}", file=sys.stderr)
+        return EXIT_SOLVER
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -1,0 +1,296 @@
+"""``model = "discrete"``: case file → model → steady state → results (SPEC §2, §6).
+
+Everything in the case is read and checked (:func:`read_discrete_case`) before any
+computation; :func:`run_case` then solves and returns the summary, the dataset and the
+figures. Keys are documented in ``docs/discrete.md``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import xarray as xr
+
+from slipcycle.discrete.loads import DiscreteLoad, LoadCase
+from slipcycle.discrete.model import STATE_NAMES, FrictionalSystem, ModelError
+from slipcycle.discrete.steady import InadmissibleInitialState, initial_state, simulate
+from slipcycle.discrete.wellposed import critical_friction
+from slipcycle.io import Case, CaseError, RunOutputs, Section
+from slipcycle.loading import HarmonicLoad, TabulatedLoad
+
+__all__ = ["run_case", "read_discrete_case", "DiscreteCase"]
+
+
+class DiscreteCase:
+    """A fully validated discrete case (model, load, run settings)."""
+
+    def __init__(self, system, load, f_crit, run, initial_slip, protocol):
+        self.system = system
+        self.load = load
+        self.f_crit = f_crit
+        self.run = run
+        self.initial_slip = initial_slip
+        self.protocol = protocol
+
+
+def _matrices(sec: Section) -> tuple[dict, dict]:
+    """A, B, C inline or from ``stiffness_file``; returns (matrices, key of each)."""
+    if sec.has("stiffness_file"):
+        for k in ("A", "B", "C"):
+            if sec.has(k):
+                raise sec.error(k, "give either stiffness_file or A, B, C inline, not both")
+        path = sec.path("stiffness_file")
+        order = sec.string("dof_order", "tangential_first",
+                           choices=("tangential_first", "interleaved"))
+        from slipcycle.io.matrices import read_stiffness
+
+        try:
+            mats = read_stiffness(path, order)
+        except (ValueError, OSError, KeyError) as exc:
+            raise sec.error("stiffness_file", f"cannot read reduced stiffness: {exc}") from None
+        keys = {k: sec.key("stiffness_file") + f" (matrix {k})" for k in ("A", "B", "C", "K")}
+        return mats, keys
+    A = sec.array("A", shape=(None, None))
+    n = A.shape[0]
+    B = sec.array("B", shape=(n, n))
+    C = sec.array("C", shape=(n, n))
+    return {"A": A, "B": B, "C": C}, {k: sec.key(k) for k in ("A", "B", "C")}
+
+
+def _periodic(sec: Section, name: str, n: int, lam: float):
+    """Per-node load ``name`` (p or q): harmonic (name0, name1, name1_phase) or tabulated
+    (theta, name_table)."""
+    mean = sec.array(f"{name}0", np.zeros(n) if name == "q" else None, shape=(n,),
+                     scalar_ok=True)
+    if mean is None:
+        raise sec.error(f"{name}0", "required key is missing (mean normal load per node)")
+    table_key = f"{name}_table"
+    amp_key = f"{name}1"
+    if sec.has(table_key):
+        if sec.has(amp_key):
+            raise sec.error(amp_key, f"give either {amp_key} (harmonic) or {table_key} "
+                                     "(tabulated), not both")
+        theta = sec.array("theta", shape=(None,), ge=0.0, lt=2 * np.pi)
+        if theta.size < 2 or np.any(np.diff(theta) <= 0):
+            raise sec.error("theta", "must have at least 2 strictly increasing angles in "
+                                     "[0, 2π)")
+        vals = sec.array(table_key, shape=(theta.size, n))
+        return TabulatedLoad(theta, vals, mean, lam)
+    amp = sec.array(amp_key, np.zeros(n))
+    if amp.ndim == 1:
+        amp = sec.coerce_array(amp_key, amp, shape=(n,))[None, :]
+    else:
+        amp = sec.coerce_array(amp_key, amp, shape=(None, n))
+    phase = sec.array(f"{name}1_phase", 0.0)
+    if phase.ndim == 0:
+        phase = np.full(amp.shape, float(phase))
+    elif phase.ndim == 1 and amp.shape[0] == 1:
+        phase = sec.coerce_array(f"{name}1_phase", phase, shape=(n,))[None, :]
+    else:
+        phase = sec.coerce_array(f"{name}1_phase", phase, shape=amp.shape)
+    return HarmonicLoad(mean, amp, phase, lam)
+
+
+def _time_function(sec: Section, lam: float):
+    """Scalar time function g(θ) = mean + λ g̃(θ) of a load case."""
+    mean = sec.float("mean", 0.0)
+    if sec.has("theta"):
+        theta = sec.array("theta", shape=(None,), ge=0.0, lt=2 * np.pi)
+        if theta.size < 2 or np.any(np.diff(theta) <= 0):
+            raise sec.error("theta", "must have at least 2 strictly increasing angles in "
+                                     "[0, 2π)")
+        vals = sec.array("values", shape=(theta.size,))
+        return TabulatedLoad(theta, vals[:, None], [mean], lam)
+    amp = np.atleast_1d(sec.array("amplitude", 0.0))
+    if amp.ndim != 1:
+        raise sec.error("amplitude", "must be a number or a list (one per harmonic)")
+    phase = np.atleast_1d(sec.array("phase", 0.0))
+    if phase.size == 1:
+        phase = np.full(amp.shape, float(phase[0]))
+    elif phase.shape != amp.shape:
+        raise sec.error("phase", f"must be a number or a list of {amp.size} phases")
+    return HarmonicLoad([mean], amp[:, None], phase[:, None], lam)
+
+
+def read_discrete_case(case: Case) -> DiscreteCase:
+    """Read and validate every key of a discrete case; no computation beyond checks.
+
+    Raises
+    ------
+    CaseError
+        Naming the offending key and the problem.
+    """
+    sec = case.section("discrete")
+    mats, mkeys = _matrices(sec)
+    n = np.asarray(mats["A"]).shape[0] if np.ndim(mats["A"]) == 2 else 0
+    friction = sec.array("friction", shape=(n,), ge=0.0, scalar_ok=True)
+    accept = sec.bool("accept_ill_posed", False)
+    exact_max = sec.int("f_crit_exact_max_nodes", 10, ge=0, le=14)
+    init = sec.array("initial_slip", None, shape=(n,))
+    proto_secs = sec.tables("protocol", None)
+    if init is not None and proto_secs:
+        raise sec.error("protocol", "give either initial_slip or an assembly protocol, "
+                                    "not both")
+    protocol = None
+    if proto_secs:
+        states = []
+        for ps in proto_secs:
+            p = ps.array("p_w", shape=(n,), scalar_ok=True)
+            q = ps.array("q_w", np.zeros(n), shape=(n,), scalar_ok=True)
+            states.append(np.concatenate([q, p]))
+            ps.finish()
+        protocol = np.array(states)
+
+    ld = case.section("loading")
+    lam = ld.float("lam", 1.0, ge=0.0)
+    p_load = _periodic(ld, "p", n, lam)
+    q_load = _periodic(ld, "q", n, lam)
+    cases = []
+    for cs in ld.tables("load_case", None):
+        if cs.has("file_case"):
+            k = cs.int("file_case", ge=0)
+            if "p_w" not in mats or "q_w" not in mats:
+                raise cs.error("file_case", "the stiffness_file holds no load cases "
+                                            "(arrays p_w, q_w)")
+            pw = np.atleast_2d(mats["p_w"])
+            qw = np.atleast_2d(mats["q_w"])
+            if k >= pw.shape[0]:
+                raise cs.error("file_case", f"must be < {pw.shape[0]} (load cases in file)")
+            pvec, qvec = np.asarray(pw[k], float), np.asarray(qw[k], float)
+            if pvec.shape != (n,) or qvec.shape != (n,):
+                raise cs.error("file_case", f"load case vectors must have {n} entries")
+        else:
+            pvec = cs.array("p", np.zeros(n), shape=(n,))
+            qvec = cs.array("q", np.zeros(n), shape=(n,))
+        cases.append(LoadCase(pvec, qvec, _time_function(cs, lam)))
+        cs.finish()
+    load = DiscreteLoad(p_load, q_load, tuple(cases))
+
+    rn = case.section("run", required=False)
+    run = {
+        "cycles": rn.int("cycles", 40, ge=1, le=100000),
+        "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1, le=10_000_000),
+        "tol": rn.float("tolerance", 1e-8, gt=0.0, lt=1.0),
+        "min_cycles": rn.int("min_cycles", 1, ge=1),
+    }
+    case.finish()
+
+    # -- model checks (no solving yet) ---------------------------------------------------
+    try:
+        system = FrictionalSystem(mats["A"], mats["B"], mats["C"], friction)
+    except ModelError as exc:
+        key = mkeys.get(exc.name, sec.key(exc.name))
+        raise CaseError(key, exc.problem) from None
+    fc = critical_friction(system.A, system.B, system.friction, exact_max_nodes=exact_max)
+    fmax = float(np.max(system.friction))
+    if fmax >= fc.f_crit and not accept:
+        raise CaseError(sec.key("friction"),
+                        f"f = {fmax:g} is not below the critical friction coefficient "
+                        f"f_crit = {fc.f_crit:.6g} ({fc.method}; nodes {list(fc.nodes)}, slip "
+                        f"signs {list(fc.signs)}): the rate problem is ill posed (Klarbring "
+                        "P-matrix condition). Set discrete.accept_ill_posed = true to run "
+                        "anyway")
+    if init is not None:
+        r0 = load(np.array([0.0]))[0]
+        F = max(float(np.max(np.abs(load.cycle_samples(run["steps_per_cycle"])[1]))), 1e-300)
+        try:
+            initial_state(system, r0, init, 1e-10 * F)
+        except InadmissibleInitialState as exc:
+            raise CaseError(sec.key("initial_slip"), f"inadmissible at θ = 0: {exc}") from None
+    return DiscreteCase(system, load, fc, run, init, protocol)
+
+
+def _dataset(dc: DiscreteCase, res) -> xr.Dataset:
+    n = dc.system.n_nodes
+    theta = res.theta
+    loads = dc.load(theta)
+    loads[-1] = loads[0]
+    cyc = np.arange(1, res.cycles_run + 1)
+    dims = ("cycle", "theta", "node")
+    ds = xr.Dataset(
+        {
+            "slip": (dims, res.x[:, :, :n], {"units": "m", "long_name": "tangential slip v"}),
+            "separation": (dims, res.x[:, :, n:], {"units": "m",
+                                                   "long_name": "normal separation w"}),
+            "tangential_reaction": (dims, res.r[:, :, :n], {"units": "N",
+                                                            "long_name": "q"}),
+            "normal_reaction": (dims, res.r[:, :, n:], {"units": "N",
+                                                        "long_name": "p (compressive > 0)"}),
+            "node_state": (dims, res.modes, {
+                "units": "1",
+                "long_name": "node state on the last event piece before the sample",
+                "flag_values": np.arange(4, dtype=np.int8),
+                "flag_meanings": " ".join(STATE_NAMES)}),
+            "q_w": (("theta", "node"), loads[:, :n], {"units": "N",
+                                                      "long_name": "tangential load q^w"}),
+            "p_w": (("theta", "node"), loads[:, n:], {"units": "N",
+                                                      "long_name": "normal load p^w"}),
+            "friction_limit": (dims, dc.system.friction * res.r[:, :, n:],
+                               {"units": "N", "long_name": "f p"}),
+            "dissipation_per_node": (("node",), res.dissipation_per_node,
+                                     {"units": "J", "long_name": "D_j of the last cycle"}),
+            "dissipation_history": (("cycle",), np.array(res.dissipation_history),
+                                    {"units": "J", "long_name": "total D of each cycle"}),
+            "events": (("cycle",), np.array(res.events_per_cycle),
+                       {"units": "1", "long_name": "events located in each cycle"}),
+        },
+        coords={
+            "cycle": ("cycle", cyc, {"units": "1"}),
+            "theta": ("theta", theta, {"units": "rad", "long_name": "cycle angle"}),
+            "node": ("node", np.arange(n), {"units": "1"}),
+        },
+    )
+    return ds
+
+
+def summarize(dc: DiscreteCase, res, wall: float) -> dict:
+    """The summary dictionary (keys documented in docs/discrete.md)."""
+    fc = dc.f_crit
+    return {
+        "model": "discrete",
+        "n_nodes": dc.system.n_nodes,
+        "steady_state": res.steady_state,
+        "converged": res.steady_converged,
+        "residual": res.residual,
+        "cycles_run": res.cycles_run,
+        "dissipation_per_cycle": res.dissipation_per_cycle,
+        "dissipation_per_node": res.dissipation_per_node,
+        "work_of_loads_per_cycle": res.work_of_loads,
+        "energy_balance_error": res.energy_balance_error,
+        "slipping_nodes": res.slipping_nodes,
+        "permanently_stuck_nodes": res.permanently_stuck_nodes,
+        "separating_nodes": res.separating_nodes,
+        "separation": bool(res.separating_nodes),
+        "ratchet_per_cycle": res.ratchet_per_cycle if res.steady_state == "ratcheting"
+        else None,
+        "memory_erased": res.all_slip_or_separated,
+        "f_crit": fc.f_crit,
+        "f_crit_lower_bound": fc.lower_bound,
+        "f_crit_method": fc.method,
+        "friction_max": float(np.max(dc.system.friction)),
+        "well_posed": bool(np.max(dc.system.friction) < fc.f_crit),
+        "events_total": int(sum(res.events_per_cycle)),
+        "events_last_cycle": int(res.events_per_cycle[-1]),
+        "wall_time_s": wall,
+    }
+
+
+def run_case(case: Case) -> RunOutputs:
+    """Validate the whole case, solve to the steady state, return summary/dataset/figures."""
+    dc = read_discrete_case(case)
+    t0 = time.perf_counter()
+    res = simulate(dc.system, dc.load, initial_slip=dc.initial_slip, protocol=dc.protocol,
+                   **dc.run)
+    wall = time.perf_counter() - t0
+    summary = summarize(dc, res, wall)
+    ds = _dataset(dc, res)
+    from slipcycle.plot import discrete as plots
+
+    figures = {
+        "slip_and_tractions": lambda: plots.slip_and_tractions(ds),
+        "hysteresis": lambda: plots.hysteresis(ds),
+    }
+    if dc.system.n_nodes == 2:
+        figures["v_space"] = lambda: plots.v_space(dc.system, dc.load, res)
+    return RunOutputs(summary=summary, dataset=ds, figures=figures)

@@ -1,0 +1,148 @@
+"""The coupled discrete frictional system (SPEC §2, seed 001 §3).
+
+N contact nodes of a 2-D elastic body, reduced to the contact degrees of freedom:
+
+    q = q^w(θ) + A v + Bᵀ w      tangential reactions
+    p = p^w(θ) + B v + C w       normal reactions (compressive positive)
+
+with v the tangential slip and w ≥ 0 the normal separation of each node. The reduced
+stiffness K = [[A, Bᵀ], [B, C]] must be symmetric positive definite.
+
+Vectors of the state and of the reactions are stored with the tangential part first:
+``x = [v, w]`` (2N,) and ``r = [q, p]`` (2N,), so that ``r = r^w + K x``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["FrictionalSystem", "ModelError", "STICK", "SLIP_POS", "SLIP_NEG", "SEPARATED",
+           "STATE_NAMES"]
+
+#: Node states (modes). ``SLIP_POS``: v̇ > 0 with q = −f p; ``SLIP_NEG``: v̇ < 0 with q = +f p.
+STICK, SLIP_POS, SLIP_NEG, SEPARATED = 0, 1, 2, 3
+STATE_NAMES = ("stick", "slip_positive", "slip_negative", "separated")
+
+
+class ModelError(ValueError):
+    """An invalid model. ``name`` is the matrix or parameter at fault (``"A"``, ``"friction"``)."""
+
+    def __init__(self, name: str, problem: str):
+        self.name = name
+        self.problem = problem
+        super().__init__(f"{name}: {problem}")
+
+
+def _square(name: str, M, n: int | None) -> np.ndarray:
+    try:
+        M = np.asarray(M, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(name, "must be a square matrix of numbers") from None
+    if M.ndim != 2 or M.shape[0] != M.shape[1]:
+        raise ModelError(name, f"must be a square matrix, got shape {M.shape}")
+    if n is not None and M.shape[0] != n:
+        raise ModelError(name, f"must be {n}×{n} like A, got {M.shape[0]}×{M.shape[1]}")
+    if not np.all(np.isfinite(M)):
+        raise ModelError(name, "must contain only finite numbers (found nan or inf)")
+    return M
+
+
+def _check_spd(name: str, M: np.ndarray, rtol: float = 1e-10) -> None:
+    scale = max(np.max(np.abs(M)), np.finfo(float).tiny)
+    asym = np.max(np.abs(M - M.T))
+    if asym > rtol * scale:
+        i, j = np.unravel_index(np.argmax(np.abs(M - M.T)), M.shape)
+        raise ModelError(name, f"must be symmetric: entries [{i}][{j}] = {M[i, j]:.6g} and "
+                               f"[{j}][{i}] = {M[j, i]:.6g} differ")
+    eig = np.linalg.eigvalsh(0.5 * (M + M.T))
+    if eig[0] <= rtol * max(eig[-1], 0.0) or eig[0] <= 0.0:
+        raise ModelError(name, f"must be positive definite: smallest eigenvalue {eig[0]:.6g} "
+                               f"(largest {eig[-1]:.6g})")
+
+
+@dataclass(frozen=True)
+class FrictionalSystem:
+    """A validated coupled discrete frictional system.
+
+    Parameters
+    ----------
+    A : (N, N) array_like
+        Tangential stiffness [N/m], symmetric positive definite.
+    B : (N, N) array_like
+        Normal–tangential coupling [N/m]: ``B[j, i]`` is the normal reaction at node j per
+        unit slip of node i. Unrestricted; ``B = 0`` is the uncoupled case.
+    C : (N, N) array_like
+        Normal stiffness [N/m], symmetric positive definite.
+    friction : float or (N,) array_like
+        Coulomb coefficient f ≥ 0 of each node.
+
+    Raises
+    ------
+    ModelError
+        Naming the matrix and the failed property (shape, finiteness, symmetry, positive
+        definiteness of A, C or of the whole K = [[A, Bᵀ], [B, C]], f < 0).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    friction: np.ndarray
+    K: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        A = _square("A", self.A, None)
+        n = A.shape[0]
+        if n < 1:
+            raise ModelError("A", "must have at least one node")
+        B = _square("B", self.B, n)
+        C = _square("C", self.C, n)
+        _check_spd("A", A)
+        _check_spd("C", C)
+        A = 0.5 * (A + A.T)
+        C = 0.5 * (C + C.T)
+        K = np.block([[A, B.T], [B, C]])
+        try:
+            np.linalg.cholesky(K)
+        except np.linalg.LinAlgError:
+            eig = np.linalg.eigvalsh(K)[0]
+            raise ModelError("B", "K = [[A, Bᵀ], [B, C]] is not positive definite "
+                                  f"(smallest eigenvalue {eig:.6g}): the coupling B is too "
+                                  "large for A and C") from None
+        try:
+            f = np.asarray(self.friction, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError("friction", "must be a number or a list of numbers") from None
+        if f.ndim == 0:
+            f = np.full(n, float(f))
+        if f.shape != (n,):
+            raise ModelError("friction", f"must be a number or a list of {n} numbers, got "
+                                         f"shape {f.shape}")
+        if not np.all(np.isfinite(f)):
+            raise ModelError("friction", "must be finite")
+        if np.any(f < 0):
+            raise ModelError("friction", f"must be >= 0, got {f[f < 0][0]:g}")
+        for name, val in (("A", A), ("B", B), ("C", C), ("friction", f), ("K", K)):
+            val = np.array(val, dtype=float)
+            val.setflags(write=False)
+            object.__setattr__(self, name, val)
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of contact nodes N."""
+        return self.A.shape[0]
+
+    @property
+    def uncoupled(self) -> bool:
+        """True if B = 0 (frictional Melan theorem applies)."""
+        return not np.any(self.B)
+
+    def reactions(self, x: np.ndarray, r_w: np.ndarray) -> np.ndarray:
+        """Reactions ``r = [q, p] = r^w + K x`` for a state ``x = [v, w]`` (both (2N,) or
+        (..., 2N)), in N."""
+        return r_w + x @ self.K.T
+
+    def stiffness_scale(self) -> float:
+        """A typical stiffness (largest diagonal entry of K), N/m."""
+        return float(np.max(np.diag(self.K)))

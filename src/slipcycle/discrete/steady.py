@@ -1,0 +1,261 @@
+"""Cycling to the steady state and its classification (SPEC §2).
+
+:func:`simulate` assembles the system (initial slip state or assembly protocol), then runs
+load cycles with the exact evolution of :mod:`~slipcycle.discrete.evolution` until the
+state at the start of a cycle repeats within a tolerance, or the maximum number of cycles
+is reached. The steady cycle is classified as
+
+- ``shakedown``: no node slips (nodes may still separate and close: ``separation``),
+- ``cyclic_slip``: some nodes slip every cycle, the others stay permanently stuck,
+- ``ratcheting``: the state drifts by the same amount every cycle (slip accumulates),
+- ``not_converged``: no repetition within the cycles allowed; the residual is reported
+  together with the dissipation of the last cycle run.
+
+Dissipation per node D_j = −∮ q_j dv_j and in total are those of the last cycle run; the
+energy balance Σ D_j = ∮ (vᵀdq^w + wᵀdp^w) is checked on it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from slipcycle.discrete.evolution import Evolution
+from slipcycle.discrete.lcp import lemke
+from slipcycle.discrete.loads import DiscreteLoad
+from slipcycle.discrete.model import FrictionalSystem
+
+__all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState"]
+
+STEADY_CLASSES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged")
+
+
+class InadmissibleInitialState(ValueError):
+    """The initial slip violates a friction or contact inequality at θ = 0."""
+
+    def __init__(self, node: int, margin: float, what: str):
+        self.node = node
+        self.margin = margin
+        super().__init__(f"node {node} {what} (margin {margin:.6g} N)")
+
+
+@dataclass
+class SteadyResult:
+    """Outcome of :func:`simulate` (all arrays in SI units; node indices from 0).
+
+    Attributes
+    ----------
+    steady_state : str
+        One of ``shakedown``, ``cyclic_slip``, ``ratcheting``, ``not_converged``.
+    residual : float
+        max |x_c − x_{c−1}| of the start-of-cycle states of the last two cycles, relative
+        to the displacement scale (for ratcheting: of their differences).
+    cycles_run : int
+    dissipation_per_node : (N,) array
+        D_j of the last cycle run [J].
+    work_of_loads : float
+        ∮ (vᵀdq^w + wᵀdp^w) over the last cycle run [J].
+    slipping_nodes, permanently_stuck_nodes, separating_nodes : lists of int
+    theta : (n+1,) array
+        Load sample angles of one cycle [rad].
+    x, r : (cycles_run, n+1, 2N) arrays
+        States [v, w] (m) and reactions [q, p] (N) at the samples of every cycle run.
+    modes : (cycles_run, n+1, N) int8 array
+        Node state on the last piece before each sample (0 stick, 1 slip_positive,
+        2 slip_negative, 3 separated).
+    cycle_start_states : (cycles_run+1, 2N) array
+    events_per_cycle : list of int
+    ratchet_per_cycle : (N,) array
+        Slip increment per cycle v_c − v_{c−1} of the last cycle [m].
+    """
+
+    steady_state: str
+    residual: float
+    cycles_run: int
+    dissipation_per_node: np.ndarray
+    work_of_loads: float
+    slipping_nodes: list
+    permanently_stuck_nodes: list
+    separating_nodes: list
+    theta: np.ndarray
+    x: np.ndarray
+    r: np.ndarray
+    modes: np.ndarray
+    cycle_start_states: np.ndarray
+    events_per_cycle: list
+    ratchet_per_cycle: np.ndarray
+    all_slip_or_separated: bool
+    disp_scale: float
+    solver_stats: dict = field(default_factory=dict)
+    dissipation_history: list = field(default_factory=list)
+    initial_state: np.ndarray | None = None
+    stored_energy_change: float = 0.0
+    force_scale: float = 1.0
+
+    @property
+    def dissipation_per_cycle(self) -> float:
+        """Total dissipation of the last (steady) cycle, J."""
+        return float(np.sum(self.dissipation_per_node))
+
+    @property
+    def energy_balance_error(self) -> float:
+        """|W − Σ D_j − ΔΠ| over the last cycle, relative to max(|W|, |Σ D_j|, F·x_scale).
+
+        ΔΠ is the change of the stored energy Π = ½ xᵀKx + r^wᵀx over the cycle (zero once
+        the cycle is steady, so that Σ D_j = W)."""
+        d = self.dissipation_per_cycle
+        ref = max(abs(d), abs(self.work_of_loads), self.force_scale * self.disp_scale)
+        return abs(self.work_of_loads - d - self.stored_energy_change) / ref
+
+    @property
+    def steady_converged(self) -> bool:
+        return self.steady_state != "not_converged"
+
+
+def initial_state(system: FrictionalSystem, r_w: np.ndarray, v0: np.ndarray,
+                  force_tol: float) -> np.ndarray:
+    """State x = [v0, w] at load r^w for an imposed slip v0 (SPEC §2, initial conditions).
+
+    The separation w solves the contact LCP  w ≥ 0, p = p^w + B v0 + C w ≥ 0, wᵀp = 0
+    (unique, C positive definite). Then every node must satisfy |q_j| ≤ f_j p_j.
+
+    Raises
+    ------
+    InadmissibleInitialState
+        Naming the first offending node and its margin f p − |q| < 0.
+    """
+    n = system.n_nodes
+    v0 = np.asarray(v0, float)
+    p_w = r_w[n:]
+    w = lemke(system.C, p_w + system.B @ v0)
+    if w is None:  # pragma: no cover - C is SPD, Lemke always succeeds
+        raise RuntimeError("contact problem for the initial state has no solution")
+    x = np.concatenate([v0, w])
+    r = r_w + system.K @ x
+    q, p = r[:n], r[n:]
+    margin = system.friction * p - np.abs(q)
+    bad = np.flatnonzero(margin < -force_tol)
+    if bad.size:
+        j = int(bad[np.argmin(margin[bad])])
+        what = ("is separated at θ = 0 but carries a tangential reaction q = "
+                f"{q[j]:.6g} N") if w[j] > 0 else (
+            f"violates the friction inequality |q| ≤ f p at θ = 0: q = {q[j]:.6g} N, "
+            f"f p = {system.friction[j] * p[j]:.6g} N")
+        raise InadmissibleInitialState(j, float(margin[j]), what)
+    return x
+
+
+def _force_scale(values: np.ndarray) -> float:
+    s = float(np.max(np.abs(values), initial=0.0))
+    return s if s > 0 else 1.0
+
+
+def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
+             steps_per_cycle: int = 100, initial_slip: np.ndarray | None = None,
+             protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,
+             record: bool = True) -> SteadyResult:
+    """Run load cycles to the steady state.
+
+    Parameters
+    ----------
+    system : FrictionalSystem
+    load : DiscreteLoad
+    cycles : int
+        Maximum number of cycles.
+    steps_per_cycle : int
+        Load samples per cycle (the path is linear between samples; breakpoints of
+        tabulated loads are added).
+    initial_slip : (N,) array, optional
+        Slip v0 at θ = 0 (must be admissible). Excludes ``protocol``.
+    protocol : (S, 2N) array, optional
+        Assembly protocol: load states r^w = [q^w, p^w] visited in order, linearly, from
+        the unloaded undeformed state before the first cycle; the path then goes on
+        linearly to the load at θ = 0. Without either, the system is loaded linearly from
+        the unloaded state to the load at θ = 0.
+    tol : float
+        Relative tolerance of the steady-state test.
+    min_cycles : int
+        Run at least this many cycles.
+    record : bool
+        Keep the sample histories of every cycle.
+
+    Returns
+    -------
+    SteadyResult
+    """
+    n = system.n_nodes
+    theta, vals = load.cycle_samples(steps_per_cycle)
+    scale_vals = vals if protocol is None else np.vstack([vals, protocol])
+    F = _force_scale(scale_vals)
+    disp_scale = F / float(np.max(np.diag(system.K)))
+    if initial_slip is not None:
+        x0 = initial_state(system, vals[0], initial_slip, 1e-10 * F)
+        evo = Evolution(system, x0, vals[0], F)
+    else:
+        evo = Evolution(system, np.zeros(2 * n), np.zeros(2 * n), F)
+        path = [np.zeros(2 * n)]
+        if protocol is not None:
+            path += list(np.atleast_2d(protocol))
+        path.append(vals[0])
+        path = np.array(path)
+        evo.follow(np.arange(len(path), dtype=float), path)
+        evo.resync()
+    x_init = evo.x.copy()
+    starts = [evo.x.copy()]
+    xs, rs, ms, events, diss_hist = [], [], [], [], []
+    state, residual, totals = "not_converged", np.inf, None
+    ratchet = np.zeros(n)
+    for c in range(cycles):
+        totals = evo.follow(theta, vals, record=record)
+        evo.resync()
+        starts.append(evo.x.copy())
+        events.append(totals.events)
+        diss_hist.append(float(totals.dissipation.sum()))
+        if record:
+            xs.append(totals.samples["x"])
+            rs.append(totals.samples["r"])
+            ms.append(totals.samples["modes"])
+        xscale = max(disp_scale, float(np.max(np.abs(np.array(starts[-2:])))))
+        d1 = starts[-1] - starts[-2]
+        residual = float(np.max(np.abs(d1))) / xscale
+        if c + 1 < min_cycles:
+            continue
+        if residual <= tol:
+            state = "steady"
+            break
+        if len(starts) >= 3:
+            d0 = starts[-2] - starts[-3]
+            rres = float(np.max(np.abs(d1 - d0))) / xscale
+            if rres <= tol:
+                ratchet = d1[:n]
+                residual = rres
+                state = "ratcheting"
+                break
+    slip_tol = max(100 * tol, 1e-9) * max(disp_scale, float(np.max(np.abs(starts[-1]))))
+    slipping = np.flatnonzero(totals.slip_length > slip_tol)
+    separating = np.flatnonzero(totals.separated)
+    stuck = np.flatnonzero((totals.slip_length <= slip_tol) & ~totals.separated)
+    if state == "steady":
+        state = "shakedown" if slipping.size == 0 else "cyclic_slip"
+    if state != "ratcheting":
+        ratchet = starts[-1][:n] - starts[-2][:n]
+    x0, x1 = starts[-2], starts[-1]
+    K = system.K
+    d_stored = float(0.5 * (x1 @ K @ x1 - x0 @ K @ x0) + vals[0] @ (x1 - x0))
+    if record and xs:
+        X, R, Mo = np.array(xs), np.array(rs), np.array(ms)
+    else:
+        X = R = np.zeros((0, len(theta), 2 * n))
+        Mo = np.zeros((0, len(theta), n), np.int8)
+    return SteadyResult(
+        steady_state=state, residual=residual, cycles_run=len(events),
+        dissipation_per_node=totals.dissipation.copy(), work_of_loads=totals.work,
+        slipping_nodes=slipping.tolist(), permanently_stuck_nodes=stuck.tolist(),
+        separating_nodes=separating.tolist(), theta=theta, x=X, r=R, modes=Mo,
+        cycle_start_states=np.array(starts), events_per_cycle=events,
+        ratchet_per_cycle=ratchet, all_slip_or_separated=totals.all_slip_or_separated,
+        disp_scale=disp_scale, solver_stats=dict(evo.solver.stats),
+        dissipation_history=diss_hist, initial_state=x_init, stored_energy_change=d_stored,
+        force_scale=F)
+
