@@ -51,7 +51,8 @@ def execute(args: argparse.Namespace) -> int:
     suffix = args.model.suffix.lower()
     if suffix in (".mtx", ".npz"):
         if args.case is not None:
-            raise CaseError("--case", "needs a model file with [fe.discrete], not imported matrices")
+            raise CaseError("--case", "needs a model file with [fe.discrete], "
+                                      "not imported matrices")
         info = _import(args, provenance)
     else:
         info = _reduce(args, provenance)

@@ -1,0 +1,195 @@
+"""Mesh builders for the generated geometries of SPEC §3.
+
+All geometries are 2-D (x along the interface, y normal to it, interface at y = 0) and
+are meshed as mapped, graded tensor grids split into triangles, so that the nodes of two
+bodies meeting at the interface coincide (node-to-node pairs). Element size is uniform,
+``h = contact_width / elements``, across the contact zone and grows geometrically (ratio
+``grading``) away from it, in x and in depth.
+
+Each builder returns a list of :class:`Body`; boundaries are named facet sets:
+
+``contact``
+    the candidate contact surface (only facets inside the contact zone),
+``top`` / ``bottom``
+    the loaded or supported face away from the interface.
+
+Units: metres.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from skfem import MeshTri
+
+__all__ = ["Body", "graded_spacing", "interface_grid", "depth_grid", "block_mesh",
+           "cylinder_segment_mesh"]
+
+
+@dataclass
+class Body:
+    """One linear-elastic body.
+
+    Attributes
+    ----------
+    name : str
+        Name used in messages and output metadata ("block", "upper", "cylinder", ...).
+    mesh : skfem.MeshTri
+        Linear triangle mesh (coordinates in m); ``mesh.boundaries`` holds named facet
+        index arrays.
+    E : float
+        Young's modulus, Pa.
+    nu : float
+        Poisson's ratio (plane strain, 0 <= nu < 0.5).
+    """
+
+    name: str
+    mesh: MeshTri
+    E: float
+    nu: float
+    info: dict = field(default_factory=dict)
+
+    def facets(self, tag: str) -> np.ndarray:
+        """Facet indices of the boundary named ``tag`` (empty if absent)."""
+        b = self.mesh.boundaries or {}
+        return np.asarray(b.get(tag, np.zeros(0, dtype=np.int64)), dtype=np.int64)
+
+
+def graded_spacing(length: float, h0: float, ratio: float, hmax: float | None = None
+                   ) -> np.ndarray:
+    """Node positions 0 = s_0 < s_1 < ... < s_n = ``length`` with geometric grading.
+
+    The first interval is about ``h0``, each next one ``ratio`` times longer (capped at
+    ``hmax``); all intervals are then scaled by a common factor so the last node lands
+    exactly on ``length``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n + 1,)
+    """
+    if length <= 0:
+        return np.zeros(1)
+    hmax = length if hmax is None else hmax
+    steps = []
+    h, total = h0, 0.0
+    while total < length * (1 - 1e-9):
+        steps.append(min(h, hmax))
+        total += steps[-1]
+        h *= ratio
+    steps = np.asarray(steps)
+    if len(steps) > 1 and total - length > 0.5 * steps[-1]:
+        steps = steps[:-1]  # drop an overshooting last interval and stretch the rest
+    steps *= length / steps.sum()
+    return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+def interface_grid(width: float, contact_width: float, elements: int, ratio: float
+                   ) -> np.ndarray:
+    """x coordinates along the interface, centred at 0, shape (nx + 1,).
+
+    Uniform with ``elements`` intervals over |x| <= contact_width / 2, geometrically
+    graded (``ratio``) from there to the ends |x| = width / 2.
+    """
+    c = contact_width / 2
+    h = contact_width / elements
+    core = np.linspace(-c, c, elements + 1)
+    rest = width / 2 - c
+    if rest <= 1e-12 * width:
+        return core
+    out = c + graded_spacing(rest, h * ratio, ratio, hmax=max(rest / 3, h))[1:]
+    return np.concatenate([-out[::-1], core, out])
+
+
+def depth_grid(height: float, h0: float, ratio: float) -> np.ndarray:
+    """Depth coordinates 0..height, fine (``h0``) at the interface, shape (ny + 1,)."""
+    return graded_spacing(height, h0, ratio, hmax=max(height / 4, h0))
+
+
+def _tensor_mesh(x: np.ndarray, y: np.ndarray) -> MeshTri:
+    """Tensor grid split into triangles, mirror-symmetric about x = 0.
+
+    Cells with centre x > 0 are cut along the diagonal (i, j)-(i+1, j+1), cells with
+    x < 0 along the mirrored one, so that a symmetric x grid gives a symmetric mesh.
+    """
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    nx, ny = len(x), len(y)
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    p = np.vstack([X.ravel(), Y.ravel()])
+    i, j = np.meshgrid(np.arange(nx - 1), np.arange(ny - 1), indexing="ij")
+    i, j = i.ravel(), j.ravel()
+    a = i * ny + j
+    b = (i + 1) * ny + j
+    c = (i + 1) * ny + j + 1
+    d = i * ny + j + 1
+    right = 0.5 * (x[i] + x[i + 1]) >= 0
+    t1 = np.where(right, np.vstack([a, b, c]), np.vstack([a, b, d]))
+    t2 = np.where(right, np.vstack([a, c, d]), np.vstack([b, c, d]))
+    return MeshTri(p, np.hstack([t1, t2]))
+
+
+def _tag(mesh: MeshTri, contact_half: float, side: str, y_far: float) -> MeshTri:
+    """Name the contact facets (at y = 0, within |x| <= contact_half) and the far face."""
+    tol = 1e-9 * max(np.ptp(mesh.p[0]), np.ptp(mesh.p[1]))
+    far = "top" if side == "above" else "bottom"
+    return mesh.with_boundaries({
+        "contact": lambda p: (np.abs(p[1]) < tol) & (np.abs(p[0]) <= contact_half + tol),
+        "interface": lambda p: np.abs(p[1]) < tol,
+        far: lambda p: np.abs(p[1] - y_far) < tol,
+    })
+
+
+def block_mesh(x: np.ndarray, height: float, h0: float, ratio: float, side: str,
+               contact_half: float) -> MeshTri:
+    """Rectangle [x0, x1] × [0, height] (``side="above"``) or [-height, 0] (``"below"``).
+
+    The interface face y = 0 carries the nodes ``x``; the tag ``contact`` holds its facets
+    with |x| <= ``contact_half``.
+    """
+    y = depth_grid(height, h0, ratio)
+    if side == "above":
+        mesh = _tensor_mesh(x, y)
+        return _tag(mesh, contact_half, side, height)
+    up = _tensor_mesh(x, y)  # mirror image of the same block above the interface
+    mesh = MeshTri(np.vstack([up.p[0], -up.p[1]]), up.t)
+    return _tag(mesh, contact_half, side, -height)
+
+
+def cylinder_segment_mesh(x: np.ndarray, radius: float, height: float, h0: float,
+                          ratio: float, contact_half: float) -> tuple[MeshTri, np.ndarray]:
+    """Segment of a cylinder of radius R whose lowest point touches y = 0 at x = 0.
+
+    The body occupies ``R - sqrt(R² - x²) <= y <= height`` for x in [x0, x1] (vertical
+    sides, flat top at y = ``height``). It is a mapped grid: each column of a depth grid
+    is stretched between the arc and the top, so the arc nodes have the abscissae ``x``.
+
+    Returns
+    -------
+    mesh : skfem.MeshTri
+        Tagged ``contact`` (arc facets with |x| <= contact_half), ``interface`` (whole
+        arc) and ``top``.
+    gap : numpy.ndarray, shape (nx + 1,)
+        Height of the arc above y = 0 at each x (the initial gap profile), m.
+    """
+    arc = radius - np.sqrt(radius**2 - x**2)
+    eta = depth_grid(height, h0, ratio) / height  # 0..1, fine near the arc
+    mesh = _tensor_mesh(x, eta)
+    px, pe = mesh.p
+    col = np.searchsorted(x, px)  # exact matches: px values come from x
+    y0 = arc[np.clip(col, 0, len(x) - 1)]
+    # keep the first layers at their physical thickness (pe * height) and absorb the
+    # shortening of each column (height - y0) smoothly towards the top
+    py = y0 + pe * (height - y0)
+    mesh = MeshTri(np.vstack([px, py]), mesh.t)
+    tol = 1e-9 * radius
+    on_arc = pe == 0.0  # vertices of the lowest grid row lie on the arc
+    is_arc = np.all(on_arc[mesh.facets], axis=0)
+    inside = np.all(np.abs(mesh.p[0, mesh.facets]) <= contact_half + tol, axis=0)
+    mesh = mesh.with_boundaries({
+        "top": lambda p: np.abs(p[1] - height) < tol,
+        "interface": np.nonzero(is_arc)[0],
+        "contact": np.nonzero(is_arc & inside)[0],
+    })
+    return mesh, arc
+

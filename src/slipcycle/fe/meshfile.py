@@ -1,0 +1,115 @@
+"""Bodies from mesh files (any format meshio reads: Gmsh ``.msh``, ``.vtu``, ``.xdmf``, ...).
+
+The file must hold triangles (``triangle`` or ``triangle6``; only the corner nodes are
+used, scikit-fem adds its own mid-points for P2) and line cells that carry the named
+boundaries. A boundary is named either by a cell set (``mesh.cell_sets``) or by a Gmsh
+physical group (``field_data`` name → tag, matched against ``cell_data["gmsh:physical"]``);
+an integer tag given as a string ("7") is matched against the physical tag directly.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from skfem import MeshTri
+
+from slipcycle.fe.geometry import Body
+from slipcycle.io.case import CaseError
+
+__all__ = ["read_mesh_body"]
+
+
+def _lines_of_tag(m, tag: str) -> np.ndarray | None:
+    """(2, k) vertex pairs of the line cells named ``tag``, or None if not found."""
+    found = []
+    sets = getattr(m, "cell_sets", None) or {}
+    if tag in sets:
+        for block, idx in zip(m.cells, sets[tag], strict=False):
+            if block.type.startswith("line") and idx is not None and len(idx):
+                found.append(block.data[np.asarray(idx, int), :2])
+        if found:
+            return np.vstack(found).T
+    phys = m.cell_data.get("gmsh:physical")
+    if phys is not None:
+        number = None
+        if tag in (m.field_data or {}):
+            number = int(m.field_data[tag][0])
+        elif tag.isdigit():
+            number = int(tag)
+        if number is not None:
+            for block, data in zip(m.cells, phys, strict=False):
+                if block.type.startswith("line"):
+                    sel = np.asarray(data) == number
+                    if np.any(sel):
+                        found.append(block.data[sel, :2])
+            if found:
+                return np.vstack(found).T
+    return None
+
+
+def _known_tags(m) -> list[str]:
+    names = set((getattr(m, "cell_sets", None) or {}).keys())
+    names |= {k for k, v in (m.field_data or {}).items() if len(v) > 1 and int(v[1]) == 1}
+    return sorted(names)
+
+
+def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
+                   name: str = "body", key: str = "fe.mesh.file",
+                   scale: float = 1.0) -> Body:
+    """Read a triangle mesh and name its boundaries.
+
+    Parameters
+    ----------
+    path : path of the mesh file.
+    tags : dict
+        Name used by slipcycle (e.g. ``"contact"``) → tag in the file.
+    E, nu : elastic constants, Pa and -.
+    scale : factor applied to the coordinates (e.g. 1e-3 for a file in mm).
+
+    Raises
+    ------
+    CaseError
+        Unreadable file, no triangles, or a tag that names no line cells.
+    """
+    import meshio
+
+    try:
+        m = meshio.read(str(path))
+    except Exception as exc:  # meshio raises many types
+        raise CaseError(key, f"cannot read mesh file {path}: {exc}") from None
+    tri = [b.data[:, :3] for b in m.cells if b.type in ("triangle", "triangle6")]
+    if not tri:
+        raise CaseError(key, f"mesh file {path} holds no triangles "
+                        f"(cell types: {', '.join(b.type for b in m.cells)})")
+    t = np.vstack(tri)
+    used = np.unique(t)
+    renumber = np.full(len(m.points), -1)
+    renumber[used] = np.arange(len(used))
+    p = np.asarray(m.points, float)[used, :2].T * scale
+    if m.points.shape[1] > 2 and np.ptp(m.points[:, 2]) > 1e-12 * max(np.ptp(p), 1.0):
+        raise CaseError(key, f"mesh file {path} is not planar (z varies); need a 2-D mesh")
+    mesh = MeshTri(p, renumber[t].T)
+    facet_of = {}
+    f = mesh.facets
+    for k in range(f.shape[1]):
+        a, b = int(f[0, k]), int(f[1, k])
+        facet_of[(min(a, b), max(a, b))] = k
+    boundaries = {}
+    for our, theirs in tags.items():
+        lines = _lines_of_tag(m, str(theirs))
+        if lines is None:
+            raise CaseError(key.rsplit(".", 1)[0] + f".{our}",
+                            f"boundary tag {theirs!r} not found in {Path(path).name} "
+                            f"(line tags present: {', '.join(_known_tags(m)) or 'none'})")
+        lines = renumber[lines]
+        idx = []
+        for a, b in lines.T:
+            k = facet_of.get((min(a, b), max(a, b)))
+            if k is None:
+                raise CaseError(key.rsplit(".", 1)[0] + f".{our}",
+                                f"a line of tag {theirs!r} is not an edge of the triangles")
+            idx.append(k)
+        boundaries[our] = np.unique(np.asarray(idx, dtype=np.int64))
+    mesh = mesh.with_boundaries(boundaries)
+    return Body(name, mesh, E, nu, info={"file": str(path)})

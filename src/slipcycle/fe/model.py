@@ -1,0 +1,190 @@
+"""Model files for ``slipcycle reduce`` (``model = "fe"``); see ``docs/fe.md``.
+
+Every key is validated before any meshing; problems are :class:`CaseError` naming the
+dotted key. :func:`build_problem` returns the assembled
+:class:`~slipcycle.fe.reduction.Problem`; :func:`discrete_case_text` turns the optional
+``[fe.discrete]`` table into a ready-to-run discrete case file.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from slipcycle.fe import builders
+from slipcycle.fe.reduction import Problem, ReducedModel
+from slipcycle.io.case import Case, CaseError, Section
+
+__all__ = ["GEOMETRIES", "build_problem", "discrete_case_text", "read_discrete_table"]
+
+GEOMETRIES = ("block_on_rigid", "two_blocks", "cylinder_on_block", "mesh")
+
+
+def _material(sec: Section) -> dict:
+    return {"E": sec.float("E", gt=0), "nu": sec.float("nu", ge=0, lt=0.5)}
+
+
+def _body(sec: Section) -> dict:
+    out = {"height": sec.float("height", gt=0)}
+    out.update(_material(sec))
+    return out
+
+
+def build_problem(case: Case) -> Problem:
+    """Validate the ``[fe]`` table of ``case`` and assemble the problem."""
+    fe = case.section("fe")
+    geometry = fe.string("geometry", choices=GEOMETRIES)
+    common = {
+        "element": fe.string("element", "P2", choices=("P1", "P2")),
+        "thickness": fe.float("thickness", 1.0, gt=0),
+        "formulation": fe.string("formulation", "auto",
+                                 choices=("auto", "displacement", "mixed")),
+    }
+    read_discrete_table(fe)  # validate now, used after the reduction
+    if geometry == "mesh":
+        return _mesh_problem(fe, common, case)
+    common["top"] = fe.string("top", "displacement", choices=("displacement",))
+    width = fe.float("width", gt=0)
+    grid = {
+        "elements": fe.int("elements", 20, ge=1, le=20000),
+        "grading": fe.float("grading", 1.3, ge=1.0, le=3.0),
+    }
+    if geometry == "cylinder_on_block":
+        radius = fe.float("radius", gt=0)
+        if width >= 2 * radius:
+            raise fe.error("width", f"must be < 2 * radius = {2 * radius:g}, got {width:g}")
+        cw = fe.float("contact_width", gt=0, le=width)
+        cyl, blk = fe.table("cylinder"), fe.table("block")
+        cyl_d, blk_d = _body(cyl), _body(blk)
+        ymin = radius - np.sqrt(radius**2 - (width / 2) ** 2)
+        if cyl_d["height"] <= 1.5 * ymin:
+            raise cyl.error("height", f"must exceed 1.5 × the arc height at the sides "
+                                      f"({1.5 * ymin:g} m), got {cyl_d['height']:g}")
+        cyl.finish()
+        blk.finish()
+        case.finish()
+        return builders.cylinder_on_block(radius=radius, cylinder=cyl_d, block=blk_d,
+                                          width=width, contact_width=cw, **grid, **common)
+    cw = fe.float("contact_width", width, gt=0, le=width)
+    if geometry == "block_on_rigid":
+        body = {"height": fe.float("height", gt=0), **_material(fe)}
+        case.finish()
+        return builders.block_on_rigid(width=width, contact_width=cw, **body, **grid, **common)
+    up, lo = fe.table("upper"), fe.table("lower")
+    up_d, lo_d = _body(up), _body(lo)
+    up.finish()
+    lo.finish()
+    case.finish()
+    return builders.two_blocks(width=width, contact_width=cw, upper=up_d, lower=lo_d,
+                               **grid, **common)
+
+
+def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem:
+    from slipcycle.fe.meshfile import read_mesh_body
+
+    ms = fe.table("mesh")
+    path = ms.path("file")
+    contact = ms.string("contact")
+    raw = ms._get("clamped", [])  # a list of strings: no typed accessor in Section
+    if not isinstance(raw, list) or not all(isinstance(t, str) for t in raw):
+        raise ms.error("clamped", "must be a list of boundary tag names")
+    normal = ms.array("normal", [0.0, 1.0], shape=(2,))
+    if np.linalg.norm(normal) == 0:
+        raise ms.error("normal", "must be a non-zero vector")
+    scale = ms.float("scale", 1.0, gt=0)
+    mat = _material(ms)
+    loads = []
+    for sec in fe.tables("load_case", []):
+        name = sec.string("name")
+        if name == "gap" or any(name == d["name"] for d in loads):
+            raise sec.error("name", f"load case name {name!r} is reserved or used twice")
+        spec = {"name": name, "boundary": sec.string("boundary")}
+        has_t, has_u = sec.has("traction"), sec.has("displacement")
+        if has_t == has_u:
+            raise sec.error("traction", "give exactly one of traction = [tx, ty] (Pa) "
+                                        "or displacement = [ux, uy] (m)")
+        if has_t:
+            spec["traction"] = tuple(sec.array("traction", shape=(2,)))
+        else:
+            spec["displacement"] = tuple(sec.array("displacement", shape=(2,)))
+        sec.finish()
+        loads.append(spec)
+    ms.finish()
+    case.finish()
+    tags = {"contact": contact}
+    tags.update({t: t for t in raw})
+    tags.update({d["boundary"]: d["boundary"] for d in loads})
+    body = read_mesh_body(path, tags, mat["E"], mat["nu"], key=ms.key("file"), scale=scale)
+    return builders.from_mesh(body, contact="contact", normal=normal, clamped=tuple(raw),
+                              loads=loads, **common)
+
+
+def read_discrete_table(fe: Section) -> dict | None:
+    """Validate the optional ``[fe.discrete]`` table.
+
+    Keys: ``friction`` (scalar or per node), ``mean`` and ``amplitude`` (tables: load
+    case name → multiplier), ``phase`` (table: load case name → rad), ``lam``,
+    ``cycles``, ``steps_per_cycle``, ``stiffness_file`` (name written into the case).
+    """
+    sec = fe.table("discrete", None)
+    if sec is None:
+        return None
+    out = {
+        "friction": sec.float("friction", ge=0),
+        "lam": sec.float("lam", 1.0),
+        "cycles": sec.int("cycles", 40, ge=1),
+        "steps_per_cycle": sec.int("steps_per_cycle", 400, ge=4),
+    }
+    for name in ("mean", "amplitude", "phase"):
+        t = sec.table(name, {})
+        out[name] = {k: t.float(k) for k in list(t.data)}
+        t.finish()
+    sec.finish()
+    return out
+
+
+def discrete_case_text(table: dict, reduced: ReducedModel, stiffness_file: str,
+                       key: str = "fe.discrete") -> str:
+    """A discrete case (SPEC §6) driven by combinations of the basic load cases.
+
+    p^w(θ) = Σ_c mean_c p_c + λ Re[Σ_c amplitude_c e^{i phase_c} p_c e^{iθ}] per node
+    (the gap case enters the mean with factor 1 unless set), and likewise q^w; written
+    as p0, p1, p1_phase (and q0, q1, q1_phase).
+    """
+    names = reduced.load_cases
+    for part in ("mean", "amplitude", "phase"):
+        for k in table[part]:
+            if k not in names:
+                raise CaseError(f"{key}.{part}.{k}", f"unknown load case; the model has "
+                                f"{', '.join(names)}")
+    mean = {n: table["mean"].get(n, 1.0 if n == "gap" else 0.0) for n in names}
+    q0, p0 = reduced.combine(**mean)
+    cq = np.zeros(reduced.n, complex)
+    cp = np.zeros(reduced.n, complex)
+    for i, n in enumerate(names):
+        a = table["amplitude"].get(n, 0.0) * np.exp(1j * table["phase"].get(n, 0.0))
+        cq += a * reduced.q_w[i]
+        cp += a * reduced.p_w[i]
+
+    def arr(x):
+        return "[" + ", ".join(f"{v:.12g}" for v in np.asarray(x, float)) + "]"
+
+    friction = table["friction"]
+    lines = [
+        "# written by `slipcycle reduce`: discrete model of the reduced finite-element model",
+        'model = "discrete"',
+        "[discrete]",
+        f'stiffness_file = "{stiffness_file}"',
+        f"friction = {friction:.12g}",
+        "[loading]",
+        f"lam = {table['lam']:.12g}",
+        f"p0 = {arr(p0)}",
+        f"q0 = {arr(q0)}",
+        f"p1 = {arr(np.abs(cp))}",
+        f"p1_phase = {arr(np.angle(cp))}",
+        f"q1 = {arr(np.abs(cq))}",
+        f"q1_phase = {arr(np.angle(cq))}",
+        "[run]",
+        f"cycles = {table['cycles']}",
+        f"steps_per_cycle = {table['steps_per_cycle']}",
+    ]
+    return "\n".join(lines) + "\n"
