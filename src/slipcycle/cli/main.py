@@ -15,7 +15,7 @@ import sys
 
 from slipcycle import __version__
 
-COMMANDS = ["run", "demo", "map", "reduce"]
+COMMANDS = ["run", "demo", "map", "reduce", "limits", "shakedown", "basins", "sweep"]
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
