@@ -61,23 +61,7 @@ phase = 1.0
 cycles = 4
 steps_per_cycle = 400
 """),
-}
-
-
-def add_parser(sub) -> None:
-    p = sub.add_parser("demo", help="run the embedded examples and write a report",
-                       description=__doc__)
-    p.add_argument("--out", type=Path, default=Path("demo-report"), help="report directory")
-    p.set_defaults(execute=execute)
-
-
-def _discrete_demo() -> tuple[str, str] | None:
-    """The SPEC §6 discrete example, when the discrete solver is installed."""
-    import importlib.util
-
-    if importlib.util.find_spec("slipcycle.discrete.case") is None:
-        return None
-    return ("Coupled two-node system (SPEC §6 example)", """
+    "discrete_two_node": ("Coupled two-node system (SPEC §6 example)", """
 model = "discrete"
 [discrete]
 A = [[1.0, -0.3], [-0.3, 0.8]]
@@ -96,7 +80,33 @@ q1_phase = [0.5, 2.0]
 [run]
 cycles = 40
 steps_per_cycle = 400
-""")
+"""),
+    "rods_microslip": ("Two steel rods, distributed interface, just past slip inception", """
+model = "rods"
+[rods]
+L = [0.5, 0.5]
+radius = [0.01, 0.01]
+E = [200e9, 200e9]
+nu = [0.3, 0.3]
+density = [7850.0, 7850.0]
+friction = 0.3
+axial_force = 1.0e4
+interface = "distributed"
+interface_stiffness = 1.0e13
+damping_ratio = 0.01
+modes = 50
+[loading]
+rotation_amplitude = 0.014
+frequency_ratio = 0.3
+"""),
+}
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("demo", help="run the embedded examples and write a report",
+                       description=__doc__)
+    p.add_argument("--out", type=Path, default=Path("demo-report"), help="report directory")
+    p.set_defaults(execute=execute)
 
 
 def execute(args: argparse.Namespace) -> int:
@@ -108,10 +118,7 @@ def execute(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    cases = dict(DEMO_CASES)
-    extra = _discrete_demo()
-    if extra is not None:
-        cases["discrete_two_node"] = extra
+    cases = DEMO_CASES
     lines = [f"# slipcycle demo report (version {__version__})", ""]
     for name, (title, text) in cases.items():
         t0 = time.perf_counter()
@@ -122,7 +129,8 @@ def execute(args: argparse.Namespace) -> int:
         s = to_jsonable(outputs.summary)
         print(f"{name}: dissipation_per_cycle = {s.get('dissipation_per_cycle')} ({dt:.1f} s)")
         keys = [k for k in ("steady_state", "dissipation_per_cycle", "cycles_run",
-                            "permanent_stick_size", "W_hat", "slipping_nodes", "f_crit")
+                            "permanent_stick_size", "W_hat", "slipping_nodes", "f_crit",
+                            "omega1", "torque_ratio", "dissipation_per_cycle_qs")
                 if k in s]
         lines += [f"## {title}", "", f"Case `{name}` ({dt:.2f} s):", "", "```toml",
                   case.text.strip(), "```", "", "| quantity | value |", "|---|---|"]
