@@ -1,0 +1,101 @@
+"""Benchmarks of issue 4: a 201 × 201 basin map of a 2-node system (target < 60 s on the
+2-core reference machine) and a 41-value λ sweep of a 200-node system with 8 initial
+conditions each (case's monotonic assembly + 7 random admissible slips), on local
+processes versus one process. Both go through the Zarr sweep machinery end to end.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+import time
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+EXAMPLE = HERE.parent / "examples" / "shakedown_triangle.toml"
+
+
+def basin_map(grid: int = 201) -> float:
+    from slipcycle.discrete.basins import admissible_box, basin_row_task, load_discrete_case
+    from slipcycle.sweep import Axis, run_sweep
+
+    text = EXAMPLE.read_text()
+    dc = load_discrete_case(text, str(EXAMPLE))
+    # warm the compiled kernel (cached on disk after the first run)
+    box = admissible_box(dc.system, dc.load)
+    v1 = np.linspace(*box[0], grid)
+    v2 = np.linspace(*box[1], grid)
+    basin_row_task({"row": 0}, text, str(EXAMPLE), tuple(v1[:4]), tuple(v2))
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        fn = partial(basin_row_task, case_text=text, case_path=str(EXAMPLE),
+                     v1=tuple(v1.tolist()), v2=tuple(v2.tolist()))
+        st = run_sweep(fn, [Axis("row", tuple(range(grid)))], Path(tmp) / "b.zarr",
+                       workers=1, progress=False)
+        wall = time.perf_counter() - t0
+        assert st.done().all()
+    return wall
+
+
+def lam_sweep(workers: int, n: int = 200, lams: int = 41, starts: int = 8) -> float:
+    sys.path.insert(0, str(HERE))
+    from bench_discrete import case as fe_case
+
+    from slipcycle.discrete.basins import lam_start_task
+    from slipcycle.sweep import Axis, run_sweep
+
+    system, load = fe_case(n)
+    with tempfile.TemporaryDirectory() as tmp:
+        np.savez(Path(tmp) / "k.npz", A=system.A, B=system.B, C=system.C)
+        fmt = lambda a: "[" + ", ".join(f"{x:.17g}" for x in a) + "]"  # noqa: E731
+        h = load.q.amplitudes[0]
+        text = f"""model = "discrete"
+[discrete]
+stiffness_file = "k.npz"
+friction = 0.3
+[loading]
+lam = 1.0
+p0 = {fmt(load.p.mean)}
+q0 = {fmt(load.q.mean)}
+p1 = {fmt(load.p.amplitudes[0])}
+q1 = {fmt(h)}
+q1_phase = {fmt(load.q.phases[0])}
+[run]
+cycles = 40
+steps_per_cycle = 100
+"""
+        (Path(tmp) / "case.toml").write_text(text)
+        fn = partial(lam_start_task, case_text=text, case_path=str(Path(tmp) / "case.toml"),
+                     n_random=starts - 1, seed=0)
+        axes = [Axis("lam", tuple(np.linspace(0.2, 2.2, lams).tolist())),
+                Axis("start", tuple(range(starts)))]
+        t0 = time.perf_counter()
+        st = run_sweep(fn, axes, Path(tmp) / f"s{workers}.zarr", workers=workers,
+                       progress=False)
+        wall = time.perf_counter() - t0
+        assert st.done().all()
+    return wall
+
+
+def benchmarks() -> list[dict]:
+    rows = []
+    t = basin_map()
+    rows.append({"name": "basin map 201x201, N=2 (numba threads, 1 process)", "value": t,
+                 "unit": "s", "target": "< 60", "ok": t < 60})
+    cores = os.cpu_count() or 1
+    t1 = lam_sweep(1)
+    tp = lam_sweep(cores)
+    rows.append({"name": "lambda sweep 41x8, N=200, 1 process", "value": t1, "unit": "s"})
+    rows.append({"name": f"lambda sweep 41x8, N=200, {cores} local processes", "value": tp,
+                 "unit": "s"})
+    rows.append({"name": "lambda sweep speed-up", "value": t1 / tp, "unit": "x"})
+    return rows
+
+
+if __name__ == "__main__":  # pragma: no cover
+    for r in benchmarks():
+        print(r)

@@ -1,0 +1,484 @@
+"""Safe shakedown region and critical load factors λ1…λ4 (SPEC §2, seed 001 §3).
+
+With every node in contact (w = 0) the Coulomb inequalities |q_j| ≤ f_j p_j are 2N
+half-spaces in slip space. Constraint k = (j, s), s = ±1, reads
+
+    s q_j + f_j p_j ≥ 0   ⇔   −(s A_j + f_j B_j) · v ≤ s q^w_j(θ) + f_j p^w_j(θ)
+
+(s = +1: q_j ≥ −f p_j, the constraint that drives positive slip, seed eq. 3 II/IV;
+s = −1: q_j ≤ +f p_j, seed eq. 3 I/III). The loads are p^w = p0 + λ p̃(θ),
+q^w = q0 + λ q̃(θ) (plus load cases with time functions mean + λ g̃(θ)), so the right-hand
+side is c0_k + λ c1_k(θ) with zero-mean c1_k. A slip state v is safe for the whole cycle
+iff it satisfies every constraint at its *extreme position*
+
+    G v ≤ h(λ) = h0 + λ m,     G_k = −(s A_j + f_j B_j),  h0_k = c0_k,  m_k = min_θ c1_k(θ)
+
+(λ ≥ 0). This polyhedron S(λ) is the safe shakedown region. Definitions (SPEC §2):
+
+- λ2 = sup{λ : S(λ) ≠ ∅} — one linear program in (v, λ);
+- λ1 = sup{λ : all 2N constraints are non-redundant in S(μ) for every μ ≤ λ}; a
+  constraint is redundant if the LP max G_k v over the other constraints does not exceed
+  h_k (Ahn, Bertocchi & Barber 2008: a quadrilateral safe region for N = 2 guarantees
+  shakedown, a triangle does not). It is bracketed by a scan and bisection;
+- λ3 = smallest λ at which every node slips in every steady cycle, λ4 = smallest λ at
+  which all nodes slip or separate at one instant; both are bracketed by simulation over
+  λ and a set of initial conditions (:func:`simulation_brackets`).
+
+Extreme positions m_k are exact for one harmonic (m = −|c_h|), found by dense sampling
+and bounded Brent refinement for several harmonics, exact at the breakpoints for
+piecewise-linear (tabulated) loads, and by dense sampling with refinement otherwise.
+
+References
+----------
+A. Klarbring, M. Ciavarella, J. R. Barber, "Shakedown in elastic contact problems with
+Coulomb friction", Int. J. Solids Struct. 44 (2007) 8355–8365.
+Y. J. Ahn, E. Bertocchi, J. R. Barber, "Shakedown of coupled two-dimensional discrete
+frictional systems", J. Mech. Phys. Solids 56 (2008) 3433–3440.
+L.-E. Andersson, J. R. Barber, Y. J. Ahn, "Attractors in frictional systems subjected to
+periodic loads", SIAM J. Appl. Math. 73 (2013) 1097–1116.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import linprog, minimize_scalar
+
+from slipcycle.discrete.loads import DiscreteLoad
+from slipcycle.discrete.model import FrictionalSystem
+from slipcycle.loading import HarmonicLoad
+
+__all__ = ["SafeRegion", "safe_region", "lambda2", "lambda1", "redundant_constraints",
+           "polygon_vertices", "admissible_region_at", "sample_initial_slips",
+           "simulation_brackets", "Brackets", "constraint_names"]
+
+TWO_PI = 2.0 * np.pi
+
+
+def constraint_names(n: int) -> list[str]:
+    """Labels of the 2N constraints in the order of :class:`SafeRegion` rows.
+
+    Row 2j is (node j, s = +1): q_j ≥ −f p_j (positive slip); row 2j+1 is (node j, s = −1):
+    q_j ≤ f p_j (negative slip). For N = 2 these are seed 001 eq. 3 II, I, IV, III.
+    """
+    if n == 2:
+        return ["II (node 1, q=−fp)", "I (node 1, q=+fp)", "IV (node 2, q=−fp)",
+                "III (node 2, q=+fp)"]
+    return [f"node {j + 1} {'q=−fp' if s > 0 else 'q=+fp'}" for j in range(n) for s in (1, -1)]
+
+
+@dataclass(frozen=True)
+class SafeRegion:
+    """S(λ) = {v : G v ≤ h0 + λ m} (all nodes in contact).
+
+    Attributes
+    ----------
+    G : (2N, N) array
+        Constraint normals −(s A_j + f_j B_j) [N/m]; row 2j is s = +1, row 2j+1 is s = −1.
+    h0 : (2N,) array
+        s q0_j + f_j p0_j: right-hand sides of the mean load [N].
+    m : (2N,) array
+        min over θ of the zero-mean periodic part per unit λ, ≤ 0 [N].
+    theta_extreme : (2N,) array
+        Cycle angle [rad] at which each constraint reaches its extreme position.
+    method : str
+        How ``m`` was found: ``exact_single_harmonic``, ``harmonic_refined``,
+        ``breakpoints`` or ``sampled_refined``.
+    """
+
+    G: np.ndarray
+    h0: np.ndarray
+    m: np.ndarray
+    theta_extreme: np.ndarray
+    method: str
+
+    @property
+    def n_nodes(self) -> int:
+        return self.G.shape[1]
+
+    def h(self, lam: float) -> np.ndarray:
+        """Extreme right-hand sides h(λ) = h0 + λ m (2N,) [N]."""
+        return self.h0 + lam * self.m
+
+    def contains(self, v: np.ndarray, lam: float, tol: float = 0.0) -> np.ndarray:
+        """Whether slip states v (..., N) [m] lie in S(λ) (with slack ``tol`` [N])."""
+        return np.all(np.asarray(v) @ self.G.T <= self.h(lam) + tol, axis=-1)
+
+    @property
+    def scale(self) -> float:
+        """Force scale of the right-hand sides [N]."""
+        return float(max(np.max(np.abs(self.h0)), np.max(np.abs(self.m)), 1e-300))
+
+
+# ---------------------------------------------------------------------------------------
+# extreme positions
+# ---------------------------------------------------------------------------------------
+def _periodic_part(system: FrictionalSystem, load: DiscreteLoad):
+    """c0 (2N,) and a function θ (n,) → c1(θ) (n, 2N) of the constraint right-hand sides."""
+    n = system.n_nodes
+    f = system.friction
+    S = np.zeros((2 * n, 2 * n))          # rows k, columns [q, p]
+    for j in range(n):
+        for i, s in enumerate((1.0, -1.0)):
+            S[2 * j + i, j] = s
+            S[2 * j + i, n + j] = f[j]
+    mean_load = load.with_lam(0.0)
+    unit_load = load.with_lam(1.0)
+    c0 = S @ mean_load(np.array([0.0]))[0]
+
+    def c1(theta):
+        theta = np.atleast_1d(np.asarray(theta, float))
+        return (unit_load(theta) - mean_load(theta)) @ S.T
+
+    return c0, c1
+
+
+def _harmonic_order(load: DiscreteLoad) -> int | None:
+    """Highest harmonic if every part is harmonic, else None."""
+    funcs = [load.p, load.q] + [c.time for c in load.cases]
+    if not all(isinstance(fn, HarmonicLoad) for fn in funcs):
+        return None
+    H = 0
+    for fn in funcs:
+        nz = np.flatnonzero(np.any(fn.amplitudes != 0, axis=1))
+        if nz.size:
+            H = max(H, int(nz[-1]) + 1)
+    return H
+
+
+def _refine_minima(c1, k: int, grid: np.ndarray, vals: np.ndarray) -> tuple[float, float]:
+    """Bounded Brent refinement of the smallest sampled minima of c1[:, k] (periodic)."""
+    n = grid.size - 1                      # grid[-1] = 2π repeats grid[0]
+    y = vals[:n]
+    cand = np.flatnonzero((y <= np.roll(y, 1)) & (y <= np.roll(y, -1)))
+    cand = cand[np.argsort(y[cand])][:8]
+    best_t, best = float(grid[int(np.argmin(y))]), float(np.min(y))
+    d = grid[1] - grid[0]
+    for i in cand:
+        res = minimize_scalar(lambda t: float(c1(np.array([t]))[0, k]),
+                              bounds=(grid[i] - d, grid[i] + d), method="bounded",
+                              options={"xatol": 1e-13})
+        if res.fun < best:
+            best, best_t = float(res.fun), float(np.mod(res.x, TWO_PI))
+    return best, best_t
+
+
+def safe_region(system: FrictionalSystem, load: DiscreteLoad, samples: int = 4096
+                ) -> SafeRegion:
+    """Extreme constraint positions and the polyhedron S(λ) = {v : G v ≤ h0 + λ m}.
+
+    Parameters
+    ----------
+    system : FrictionalSystem
+    load : DiscreteLoad
+        Its λ is irrelevant: S(λ) is returned for every λ.
+    samples : int
+        Sampling density for several harmonics or mixed loads (refined by Brent's method).
+
+    Returns
+    -------
+    SafeRegion
+    """
+    n = system.n_nodes
+    f = system.friction
+    G = np.zeros((2 * n, n))
+    for j in range(n):
+        G[2 * j] = -(system.A[j] + f[j] * system.B[j])
+        G[2 * j + 1] = -(-system.A[j] + f[j] * system.B[j])
+    c0, c1 = _periodic_part(system, load)
+    H = _harmonic_order(load)
+    m = np.zeros(2 * n)
+    th_ext = np.zeros(2 * n)
+    if H == 0:
+        method = "constant"
+    elif H == 1 or (H is not None and _single_harmonic(load, H)):
+        # c1(θ) = a cos hθ + b sin hθ exactly; min = −sqrt(a² + b²)
+        h = H if H == 1 else _single_harmonic(load, H)
+        a = c1(np.array([0.0]))[0]
+        b = c1(np.array([np.pi / (2 * h)]))[0]
+        m = -np.hypot(a, b)
+        th_ext = np.mod((np.arctan2(b, a) + np.pi) / h, TWO_PI / h)
+        method = "exact_single_harmonic"
+    elif load.piecewise_linear():
+        bp = load.breakpoints()
+        vals = c1(bp)
+        idx = np.argmin(vals, axis=0)
+        m = vals[idx, np.arange(2 * n)]
+        th_ext = bp[idx]
+        method = "breakpoints"
+    else:
+        npts = max(samples, 64 * (H or 1))
+        grid = np.linspace(0.0, TWO_PI, npts + 1)
+        vals = c1(grid)
+        for k in range(2 * n):
+            m[k], th_ext[k] = _refine_minima(c1, k, grid, vals[:, k])
+        method = "harmonic_refined" if H is not None else "sampled_refined"
+    m = np.minimum(m, 0.0)
+    return SafeRegion(G, c0, m, th_ext, method)
+
+
+def _single_harmonic(load: DiscreteLoad, H: int) -> int:
+    """The harmonic order if exactly one harmonic is non-zero anywhere, else 0."""
+    funcs = [load.p, load.q] + [c.time for c in load.cases]
+    used = set()
+    for fn in funcs:
+        used |= {int(i) + 1 for i in np.flatnonzero(np.any(fn.amplitudes != 0, axis=1))}
+    return next(iter(used)) if len(used) == 1 else 0
+
+
+# ---------------------------------------------------------------------------------------
+# λ2 and λ1 by linear programs
+# ---------------------------------------------------------------------------------------
+def lambda2(region: SafeRegion, lam_max: float = 1e12) -> tuple[float, np.ndarray | None]:
+    """λ2 = max λ with S(λ) ≠ ∅, by one LP in (v, λ) (HiGHS).
+
+    Returns
+    -------
+    lam2 : float
+        ``inf`` if S(λ) is non-empty for every λ (up to ``lam_max``); ``-inf`` if even the
+        mean load admits no safe state (S(0) = ∅).
+    v : (N,) array or None
+        A slip state [m] in S(λ2) (the last safe state).
+    """
+    G, h0, m = region.G, region.h0, region.m
+    n = G.shape[1]
+    A_ub = np.hstack([G, -m[:, None]])
+    c = np.zeros(n + 1)
+    c[-1] = -1.0
+    bounds = [(None, None)] * n + [(0.0, lam_max)]
+    res = linprog(c, A_ub=A_ub, b_ub=h0, bounds=bounds, method="highs")
+    if res.status == 2:
+        return -np.inf, None
+    if res.status != 0:
+        raise RuntimeError(f"λ2 linear program failed: {res.message}")
+    lam = float(res.x[-1])
+    if lam >= lam_max * (1 - 1e-9):
+        return np.inf, res.x[:n]
+    return lam, res.x[:n]
+
+
+def redundant_constraints(region: SafeRegion, lam: float, rtol: float = 1e-9
+                          ) -> np.ndarray | None:
+    """Which of the 2N extreme constraints are redundant in S(λ) (2N bool), or None if
+    S(λ) is empty.
+
+    Constraint k is redundant when max G_k v over the other 2N − 1 constraints is at most
+    h_k(λ) + tol (it neither cuts nor defines a facet of S(λ)); tol = rtol × force scale.
+    """
+    G, h = region.G, region.h(lam)
+    n2, n = G.shape
+    tol = rtol * region.scale
+    feas = linprog(np.zeros(n), A_ub=G, b_ub=h, bounds=[(None, None)] * n, method="highs")
+    if feas.status == 2:
+        return None
+    out = np.zeros(n2, bool)
+    for k in range(n2):
+        keep = np.arange(n2) != k
+        res = linprog(-G[k], A_ub=G[keep], b_ub=h[keep], bounds=[(None, None)] * n,
+                      method="highs")
+        if res.status == 3:            # unbounded: the constraint cuts
+            continue
+        if res.status != 0:
+            raise RuntimeError(f"redundancy LP failed for constraint {k}: {res.message}")
+        out[k] = -res.fun <= h[k] + tol
+    return out
+
+
+def lambda1(region: SafeRegion, lam2: float | None = None, *, scan: int = 64,
+            tol: float = 1e-9, rtol: float = 1e-9) -> dict:
+    """λ1 = sup{λ : every constraint non-redundant in S(μ) for all 0 ≤ μ ≤ λ}.
+
+    A scan of ``scan`` values on [0, λ2] finds the first λ with a redundant constraint;
+    bisection then brackets the transition to ``tol`` (relative to λ2).
+
+    Returns
+    -------
+    dict
+        ``lambda1`` (float; lower end of the final bracket), ``bracket`` (lo, hi),
+        ``redundant_above`` (indices of the constraints redundant at ``hi``),
+        ``lps`` (number of LPs solved).
+    """
+    if lam2 is None:
+        lam2 = lambda2(region)[0]
+    n2 = region.G.shape[0]
+    lps = 0
+
+    def bad(lam):
+        nonlocal lps
+        lps += n2 + 1
+        red = redundant_constraints(region, lam, rtol)
+        return red is None or bool(red.any()), red
+
+    if not np.isfinite(lam2) or lam2 <= 0:
+        if lam2 == -np.inf:
+            return {"lambda1": -np.inf, "bracket": (-np.inf, -np.inf), "redundant_above": [],
+                    "lps": 0}
+        top = 1e6 if lam2 == np.inf else 0.0
+    else:
+        top = lam2
+    b0, red0 = bad(0.0)
+    if b0:
+        return {"lambda1": 0.0, "bracket": (0.0, 0.0),
+                "redundant_above": [] if red0 is None else np.flatnonzero(red0).tolist(),
+                "lps": lps}
+    lo, hi, red_hi = 0.0, None, None
+    for lam in np.linspace(0.0, top, scan + 1)[1:]:
+        b, red = bad(lam)
+        if b:
+            hi, red_hi = float(lam), red
+            break
+        lo = float(lam)
+    if hi is None:
+        return {"lambda1": top, "bracket": (top, top), "redundant_above": [], "lps": lps}
+    scale = max(abs(top), 1.0)
+    while hi - lo > tol * scale:
+        mid = 0.5 * (lo + hi)
+        b, red = bad(mid)
+        if b:
+            hi, red_hi = mid, red
+        else:
+            lo = mid
+    red_idx = [] if red_hi is None else np.flatnonzero(red_hi).tolist()
+    return {"lambda1": lo, "bracket": (lo, hi), "redundant_above": red_idx, "lps": lps}
+
+
+def polygon_vertices(region: SafeRegion, lam: float, rtol: float = 1e-9) -> np.ndarray:
+    """N = 2: vertices of S(λ) in counter-clockwise order, (k, 2) [m] (empty if S(λ) = ∅)."""
+    G, h = region.G, region.h(lam)
+    if G.shape[1] != 2:
+        raise ValueError("polygon_vertices needs N = 2")
+    tol = rtol * region.scale
+    pts = []
+    for a in range(len(h)):
+        for b in range(a + 1, len(h)):
+            M = G[[a, b]]
+            if abs(np.linalg.det(M)) <= 1e-12 * np.abs(M).max() ** 2:
+                continue
+            p = np.linalg.solve(M, h[[a, b]])
+            if np.all(G @ p <= h + tol):
+                pts.append(p)
+    if not pts:
+        return np.zeros((0, 2))
+    pts = np.array(pts)
+    c = pts.mean(axis=0)
+    order = np.argsort(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
+    pts = pts[order]
+    keep = [0]
+    span = max(np.ptp(pts), 1e-300)
+    for i in range(1, len(pts)):
+        if np.linalg.norm(pts[i] - pts[keep[-1]]) > 1e-9 * span:
+            keep.append(i)
+    return pts[keep]
+
+
+# ---------------------------------------------------------------------------------------
+# initial conditions
+# ---------------------------------------------------------------------------------------
+def admissible_region_at(system: FrictionalSystem, load: DiscreteLoad, theta: float = 0.0
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Slip states admissible with all nodes in contact at one instant: {v : G v ≤ b}.
+
+    Returns G (2N, N) [N/m] and b (2N,) [N] at angle ``theta`` for the load's own λ.
+    """
+    n = system.n_nodes
+    f = system.friction
+    r = load(np.array([theta]))[0]
+    q, p = r[:n], r[n:]
+    G = np.zeros((2 * n, n))
+    b = np.zeros(2 * n)
+    for j in range(n):
+        for i, s in enumerate((1.0, -1.0)):
+            G[2 * j + i] = -(s * system.A[j] + f[j] * system.B[j])
+            b[2 * j + i] = s * q[j] + f[j] * p[j]
+    return G, b
+
+
+def sample_initial_slips(system: FrictionalSystem, load: DiscreteLoad, count: int,
+                         seed: int = 0, shrink: float = 0.98) -> np.ndarray:
+    """``count`` random slip states (count, N) [m] admissible at θ = 0 with all nodes in
+    contact: random convex combinations of LP vertices of {v : G v ≤ b} (any N), shrunk
+    towards their mean by ``shrink`` so that no state lies on a friction limit.
+
+    Returns an empty (0, N) array if no admissible state exists.
+    """
+    n = system.n_nodes
+    G, b = admissible_region_at(system, load, 0.0)
+    rng = np.random.default_rng(seed)
+    verts = []
+    n_dirs = min(4 * n, 2 * n + 8, 24)
+    box = 10.0 * (np.max(np.abs(b)) + 1.0) / max(np.min(np.abs(np.diag(system.A))), 1e-300)
+    for d in range(n_dirs):
+        c = (rng.standard_normal(n) if d >= min(2 * n, 16)
+             else np.eye(n)[d // 2] * (1 if d % 2 else -1))
+        res = linprog(c, A_ub=G, b_ub=b, bounds=[(-box, box)] * n, method="highs")
+        if res.status == 0:
+            verts.append(res.x)
+    if not verts:
+        return np.zeros((0, n))
+    V = np.array(verts)
+    W = rng.dirichlet(np.full(len(V), 0.3), size=count)
+    pts = W @ V
+    centre = V.mean(axis=0)
+    return centre + shrink * (pts - centre)
+
+
+# ---------------------------------------------------------------------------------------
+# λ3, λ4 by simulation
+# ---------------------------------------------------------------------------------------
+@dataclass
+class Brackets:
+    """λ3 and λ4 brackets with the runs that support them.
+
+    Attributes
+    ----------
+    lam : (L,) array
+        Load factors simulated.
+    runs : list of dict
+        One per (λ, initial condition): ``lam``, ``start`` (label), ``steady_state``,
+        ``dissipation_per_cycle`` [J], ``slipping_nodes``, ``memory_erased``, ``cycles_run``.
+    lambda3_bracket, lambda4_bracket : (lo, hi)
+        hi: smallest simulated λ from which on every run meets the criterion (None if none
+        does); lo: the largest simulated λ below hi where some run fails it (0 if none).
+    """
+
+    lam: np.ndarray
+    runs: list = field(default_factory=list)
+    lambda3_bracket: tuple = (None, None)
+    lambda4_bracket: tuple = (None, None)
+
+
+def _bracket(lams: np.ndarray, ok: np.ndarray) -> tuple:
+    """(largest λ failing below the final all-ok stretch, first λ of that stretch)."""
+    if not ok[-1]:
+        return (float(lams[-1]), None)
+    i = len(ok) - 1
+    while i > 0 and ok[i - 1]:
+        i -= 1
+    return (float(lams[i - 1]) if i > 0 else 0.0, float(lams[i]))
+
+
+def simulation_brackets(results: list[tuple[float, str, dict]], n_nodes: int) -> Brackets:
+    """Brackets of λ3, λ4 from steady-state runs.
+
+    Parameters
+    ----------
+    results : list of (lam, start label, record)
+        ``record`` has the keys of :func:`slipcycle.discrete.basins.run_record`
+        (``steady_state``, ``dissipation_per_cycle``, ``n_slipping``, ``memory_erased``…).
+    n_nodes : int
+    """
+    lams = np.unique([r[0] for r in results])
+    every_slip = np.ones(len(lams), bool)
+    erased = np.ones(len(lams), bool)
+    runs = []
+    for lam, label, rec in results:
+        i = int(np.searchsorted(lams, lam))
+        conv = rec["steady_state"] in ("cyclic_slip", "shakedown", "ratcheting")
+        every_slip[i] &= bool(conv and rec["n_slipping"] == n_nodes)
+        erased[i] &= bool(rec["memory_erased"])
+        runs.append({"lam": float(lam), "start": label, **rec})
+    b = Brackets(lams, runs)
+    b.lambda3_bracket = _bracket(lams, every_slip)
+    b.lambda4_bracket = _bracket(lams, erased)
+    return b

@@ -1,0 +1,186 @@
+"""Figures of the shakedown analysis (seed 001 Figs. 1–3; SPEC §2).
+
+- :func:`safe_region_panels`: N = 2, one panel per load factor: the four constraints
+  I–IV at their extreme positions, the safe region S(λ) shaded, trajectories in (v1, v2)
+  from several starts ending in shakedown (green) or a cyclic-slip orbit (red);
+- :func:`dissipation_vs_lambda`: any N, steady dissipation per cycle against λ for every
+  start, with λ1, λ2 and the λ3, λ4 brackets marked;
+- :func:`basin_map`: N = 2, steady class and dissipation over the initial slip (v1, v2).
+
+Builds on :mod:`slipcycle.plot.discrete` (constraint labels, the single-run v-space
+picture). Each function returns a matplotlib Figure.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.figure import Figure
+
+from slipcycle.plot import discrete as _discrete
+
+__all__ = ["safe_region_panels", "dissipation_vs_lambda", "basin_map", "CLASS_COLORS"]
+
+#: colours of the class codes of :data:`slipcycle.sweep.case.STEADY_CODES`
+CLASS_COLORS = ["#4caf50", "#e53935", "#8e24aa", "#fb8c00", "#e0e0e0", "#000000"]
+CLASS_NAMES = ["shakedown", "cyclic slip", "ratcheting", "not converged", "inadmissible",
+               "failed"]
+
+
+def _draw_constraints(ax, region, lam, lo, hi, names):
+    from slipcycle.discrete.shakedown import polygon_vertices
+
+    G, h = region.G, region.h(lam)
+    xs = np.linspace(lo[0], hi[0], 2)
+    for k in range(G.shape[0]):
+        g = G[k]
+        if abs(g[1]) > 1e-12 * np.abs(g).max():
+            ax.plot(xs, (h[k] - g[0] * xs) / g[1], lw=1, label=names[k] + "$^E$")
+        else:
+            ax.axvline(h[k] / g[0], lw=1, label=names[k] + "$^E$")
+    P = polygon_vertices(region, lam)
+    if len(P) >= 3:
+        ax.fill(P[:, 0], P[:, 1], color="#cfe8cf", zorder=0, label="safe region S(λ)")
+    return P
+
+
+def safe_region_panels(region, panels: list[dict], lam1: float, lam2: float) -> Figure:
+    """N = 2 v-space panels.
+
+    Parameters
+    ----------
+    region : SafeRegion
+    panels : list of dict
+        Each with ``lam`` (float) and ``trajectories``: list of (v (k, 2) [m], class str).
+    lam1, lam2 : float
+        For the panel titles.
+    """
+    k = len(panels)
+    fig = Figure(figsize=(5.0 * k, 4.8))
+    axes = np.atleast_1d(fig.subplots(1, k, squeeze=False)).ravel()
+    # the constraint labels of the single-run picture (seed eq. 3 I–IV)
+    names = _constraint_names(region.n_nodes)
+    for ax, pan in zip(axes, panels, strict=True):
+        lam = pan["lam"]
+        pts = [t[0] for t in pan["trajectories"]]
+        allv = np.vstack(pts) if pts else np.zeros((0, 2))
+        from slipcycle.discrete.shakedown import polygon_vertices
+
+        P = polygon_vertices(region, lam)
+        if len(P):
+            allv = np.vstack([allv, P])
+        lo, hi = allv.min(axis=0), allv.max(axis=0)
+        span = np.maximum(hi - lo, 1e-12)
+        lo, hi = lo - 0.25 * span, hi + 0.25 * span
+        _draw_constraints(ax, region, lam, lo, hi, names)
+        for v, cls in pan["trajectories"]:
+            col = CLASS_COLORS[0] if cls == "shakedown" else (
+                CLASS_COLORS[1] if cls == "cyclic_slip" else CLASS_COLORS[3])
+            ax.plot(v[:, 0], v[:, 1], "-", color=col, lw=0.9)
+            ax.plot(v[0, 0], v[0, 1], "o", color=col, ms=4)
+            ax.plot(v[-1, 0], v[-1, 1], "s", color="k", ms=3)
+        regime = ("λ < λ1: shakedown from every start" if lam < lam1 else
+                  "λ1 < λ < λ2: depends on the start" if lam < lam2 else
+                  "λ > λ2: no shakedown")
+        ax.set_title(f"λ = {lam:.4g}  ({regime})", fontsize=9)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_xlabel("v₁ [m]")
+        ax.set_ylabel("v₂ [m]")
+    axes[0].plot([], [], "-", color=CLASS_COLORS[0], label="→ shakedown")
+    axes[0].plot([], [], "-", color=CLASS_COLORS[1], label="→ cyclic slip")
+    axes[0].legend(fontsize=6, loc="best")
+    fig.suptitle(f"Safe shakedown region (λ1 = {lam1:.4g}, λ2 = {lam2:.4g}); "
+                 "o start, ■ end", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _constraint_names(n):
+    from slipcycle.discrete.shakedown import constraint_names
+
+    return constraint_names(n)
+
+
+def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4) -> Figure:
+    """Steady dissipation per cycle [J] against λ for every start.
+
+    Parameters
+    ----------
+    lam : (L,) array
+    dissipation : (L, S) array [J]
+    classes : (L, S) int array (class codes)
+    lam1, lam2 : float
+    b3, b4 : (lo, hi) brackets of λ3, λ4 (hi may be None)
+    """
+    fig = Figure(figsize=(7, 4.5))
+    ax = fig.subplots()
+    L, S = dissipation.shape
+    for code in np.unique(classes):
+        sel = classes == code
+        LL = np.broadcast_to(np.asarray(lam)[:, None], (L, S))[sel]
+        ax.plot(LL, dissipation[sel], "o", ms=3, color=CLASS_COLORS[int(code)],
+                label=CLASS_NAMES[int(code)])
+    ymax = np.nanmax(dissipation) if np.isfinite(np.nanmax(dissipation, initial=np.nan)) \
+        else 1.0
+    for x, name, ls in ((lam1, "λ1", "--"), (lam2, "λ2", "-")):
+        if np.isfinite(x):
+            ax.axvline(x, color="k", ls=ls, lw=1)
+            ax.text(x, ymax, name, ha="right", va="top", fontsize=9)
+    for (lo, hi), name, col in ((b3, "λ3", "#1e88e5"), (b4, "λ4", "#fdd835")):
+        if hi is not None:
+            ax.axvspan(lo, hi, color=col, alpha=0.25, label=f"{name} bracket")
+    ax.set_xlabel("load factor λ")
+    ax.set_ylabel("dissipation per cycle [J]")
+    ax.legend(fontsize=7)
+    ax.set_title("steady dissipation from many initial conditions")
+    fig.tight_layout()
+    return fig
+
+
+def basin_map(v1, v2, classes, dissipation, region=None, lam=None) -> Figure:
+    """N = 2 basin map over initial slip states at θ = 0.
+
+    Parameters
+    ----------
+    v1 : (n1,) array, v2 : (n2,) array
+        Grid of initial slips [m].
+    classes : (n2, n1) int array
+        Class codes (rows: v2).
+    dissipation : (n2, n1) array [J]
+    region : SafeRegion, optional
+        Drawn at ``lam`` on top (the safe region S(λ)).
+    """
+    fig = Figure(figsize=(11, 4.8))
+    ax1, ax2 = fig.subplots(1, 2)
+    cmap = ListedColormap(CLASS_COLORS)
+    norm = BoundaryNorm(np.arange(-0.5, len(CLASS_COLORS) + 0.5), cmap.N)
+    ext = [v1[0], v1[-1], v2[0], v2[-1]]
+    ax1.imshow(classes, origin="lower", extent=ext, cmap=cmap, norm=norm, aspect="auto",
+               interpolation="nearest")
+    for code in np.unique(classes):
+        ax1.plot([], [], "s", color=CLASS_COLORS[int(code)], label=CLASS_NAMES[int(code)])
+    ax1.legend(fontsize=7, loc="best")
+    ax1.set_title("steady state")
+    D = np.ma.masked_invalid(dissipation)
+    im = ax2.imshow(D, origin="lower", extent=ext, aspect="auto", interpolation="nearest",
+                    cmap="viridis")
+    fig.colorbar(im, ax=ax2, label="dissipation per cycle [J]")
+    ax2.set_title("steady dissipation")
+    if region is not None and lam is not None:
+        from slipcycle.discrete.shakedown import polygon_vertices
+
+        P = polygon_vertices(region, lam)
+        if len(P) >= 3:
+            for ax in (ax1, ax2):
+                ax.fill(np.r_[P[:, 0], P[0, 0]], np.r_[P[:, 1], P[0, 1]], fill=False,
+                        ec="k", lw=1.2, label="S(λ)")
+    for ax in (ax1, ax2):
+        ax.set_xlabel("initial v₁ [m]")
+        ax.set_ylabel("initial v₂ [m]")
+    fig.tight_layout()
+    return fig
+
+
+#: the single-run v-space picture, re-exported for the shakedown command
+v_space = _discrete.v_space

@@ -1,0 +1,186 @@
+"""Outcomes below λ1, between λ1 and λ2, above λ2; fast kernel vs general solver; basin
+maps, box counting and the shakedown/basins commands (issue 4)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from slipcycle.discrete import DiscreteLoad, FrictionalSystem, simulate
+from slipcycle.discrete.basins import (
+    admissible_box,
+    basin_row,
+    box_counting_dimension,
+    run_records,
+)
+from slipcycle.discrete.case import read_discrete_case
+from slipcycle.discrete.fastcycle import steady_state_fast
+from slipcycle.discrete.shakedown import (
+    lambda1,
+    lambda2,
+    safe_region,
+    sample_initial_slips,
+)
+from slipcycle.io import read_case
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+RUN = {"cycles": 80, "steps_per_cycle": 60, "tol": 1e-8}
+
+
+@pytest.fixture(scope="module")
+def tri():
+    dc = read_discrete_case(read_case(EXAMPLES / "shakedown_triangle.toml"))
+    region = safe_region(dc.system, dc.load)
+    l2 = lambda2(region)[0]
+    l1 = lambda1(region, l2)["lambda1"]
+    return dc.system, dc.load, region, l1, l2
+
+
+def test_fast_kernel_agrees_with_general_solver(tri):
+    system, load, *_ = tri
+    V = sample_initial_slips(system, load, 6, seed=5)
+    for v0 in V:
+        a = steady_state_fast(system, load, v0, **RUN)
+        b = simulate(system, load, initial_slip=v0, record=False, **RUN)
+        assert a["steady_state"] == b.steady_state
+        assert a["cycles_run"] == b.cycles_run
+        assert a["dissipation_per_cycle"] == pytest.approx(b.dissipation_per_cycle, abs=1e-12)
+        np.testing.assert_allclose(a["final_slip"], b.cycle_start_states[-1][:2], atol=1e-12)
+
+
+def test_fast_kernel_falls_back_on_separation():
+    """A node that separates is handed to the general solver; the record still agrees."""
+    A = np.array([[1.0, 0.2], [0.2, 1.0]])
+    B = np.array([[0.3, 0.1], [-0.2, 0.2]])
+    system = FrictionalSystem(A, B, np.eye(2), 0.3)
+    load = DiscreteLoad.harmonic([0.3, 1.0], [0.0, 0.0], [0.5, 0.1], [0.1, 0.2],
+                                 [0.0, 0.0], [1.0, 2.0])
+    v0 = np.zeros(2)
+    assert steady_state_fast(system, load, v0, **RUN)["code"] == -1
+    rec = run_records(system, load, v0[None], **RUN)
+    res = simulate(system, load, initial_slip=v0, record=False, **RUN)
+    assert rec["dissipation_per_cycle"][0] == pytest.approx(res.dissipation_per_cycle,
+                                                            abs=1e-12)
+
+
+def _outcomes(system, load, lam, count=40):
+    ld = load.with_lam(lam)
+    V = sample_initial_slips(system, ld, count, seed=11)
+    assert len(V) == count
+    return run_records(system, ld, V, **RUN)["steady_state"]
+
+
+def test_below_lambda1_every_start_shakes_down(tri):
+    system, load, region, l1, l2 = tri
+    for lam in (0.5 * l1, 0.97 * l1):
+        assert np.all(_outcomes(system, load, lam) == 0), lam
+
+
+def test_above_lambda2_no_start_shakes_down(tri):
+    system, load, region, l1, l2 = tri
+    for lam in (1.03 * l2, 1.5 * l2):
+        cls = _outcomes(system, load, lam)
+        assert not np.any(cls == 0)
+        assert np.all(np.isin(cls, (1, 2)))
+
+
+def test_between_lambda1_and_lambda2_basin_map_shows_both(tri):
+    system, load, region, l1, l2 = tri
+    lam = 0.5 * (l1 + l2)
+    ld = load.with_lam(lam)
+    box = admissible_box(system, ld)
+    v1 = np.linspace(*box[0], 31)
+    v2 = np.linspace(*box[1], 31)
+    rows = [basin_row(system, ld, v1, y, **RUN) for y in v2]
+    cls = np.array([r["steady_state"] for r in rows])
+    assert (cls == 0).any() and (cls == 1).any()
+    # every start inside the safe region S(λ) is already safe: shakedown, no dissipation
+    V1, V2 = np.meshgrid(v1, v2)
+    inside = region.contains(np.stack([V1, V2], -1), lam, tol=-1e-9)
+    assert inside.any() and np.all(cls[inside] == 0)
+    D = np.array([r["dissipation_per_cycle"] for r in rows])
+    assert np.all(D[cls == 1] > 0)
+    assert np.max(D[cls == 0]) < 1e-5 * np.min(D[cls == 1])   # asymptotic approach only
+
+
+def test_box_counting_smooth_and_rough():
+    n = 256
+    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
+    disc = (x ** 2 + y ** 2 < 0.5).astype(int)
+    assert box_counting_dimension(disc)["dimension"] == pytest.approx(1.0, abs=0.1)
+    noise = np.random.default_rng(0).integers(0, 2, (n, n))
+    assert box_counting_dimension(noise)["dimension"] == pytest.approx(2.0, abs=0.05)
+    assert np.isnan(box_counting_dimension(np.zeros((64, 64), int))["dimension"])
+
+
+def test_shakedown_command(run_cli, tmp_path, tri):
+    system, load, region, l1, l2 = tri
+    out = tmp_path / "sd"
+    code, stdout, err = run_cli("shakedown", EXAMPLES / "shakedown_triangle.toml", "--out",
+                                out, "--lam-points", "6", "--starts", "2", "--workers", "1",
+                                "--no-progress")
+    assert code == 0, err
+    s = json.loads((out / "summary.json").read_text())
+    assert s["lambda1"] == pytest.approx(l1, rel=1e-8)
+    assert s["lambda2"] == pytest.approx(l2, rel=1e-12)
+    for key in ("lambda3_bracket", "lambda4_bracket", "dissipation_per_cycle",
+                "lambda3_evidence", "safe_region_vertices"):
+        assert key in s
+    assert s["regime"] == "between_lambda1_and_lambda2"
+    lo, hi = s["lambda3_bracket"]
+    assert hi is None or lo < hi
+    assert hi is None or hi > l2          # every node slipping needs λ above λ2 here
+    assert {p.name for p in (out / "figures").iterdir()} == {
+        "dissipation_vs_lambda.png", "safe_region_panels.png"}
+
+
+def test_basins_command_and_errors(run_cli, tmp_path, write_case):
+    out = tmp_path / "b"
+    code, stdout, err = run_cli("basins", EXAMPLES / "shakedown_triangle.toml", "--out", out,
+                                "--grid", "21", "--no-progress")
+    assert code == 0, err
+    s = json.loads((out / "summary.json").read_text())
+    assert s["both_outcomes"] is True
+    assert s["starts"] == 21 * 21
+    assert 0.5 < s["boundary_box_counting_dimension"] < 2.0
+    assert (out / "figures" / "basin_map.png").exists()
+    text = (EXAMPLES / "shakedown_triangle.toml").read_text()
+    code, _, err = run_cli("basins", EXAMPLES / "shakedown_triangle.toml", "--out",
+                           tmp_path / "c", "--grid", "1")
+    assert code == 2 and "--grid" in err
+    code, _, err = run_cli("basins", EXAMPLES / "shakedown_triangle.toml", "--out",
+                           tmp_path / "d", "--lam", "-1")
+    assert code == 2 and "--lam" in err
+    bad = write_case(text.replace("friction = 0.5", "friction = -0.5"), "bad.toml")
+    code, _, err = run_cli("shakedown", bad, "--out", tmp_path / "e")
+    assert code == 2 and "discrete.friction" in err
+    assert not (tmp_path / "e" / "summary.json").exists()
+
+
+def test_basins_random_and_protocols_any_n(run_cli, tmp_path, write_case):
+    text = (EXAMPLES / "shakedown_triangle.toml").read_text()
+    out = tmp_path / "r"
+    code, _, err = run_cli("basins", EXAMPLES / "shakedown_triangle.toml", "--out", out,
+                           "--random", "12", "--workers", "1", "--no-progress")
+    assert code == 0, err
+    s = json.loads((out / "summary.json").read_text())
+    assert s["starts"] == 12 and s["mode"] == "random"
+    protos = write_case("""
+[[protocol]]
+p_w = [[0.1, 1.0], [1.0, 1.0]]
+q_w = [[0.3, 0.0], [0.0, 0.0]]
+[[protocol]]
+p_w = [[1.0, 1.0]]
+""", "protocols.toml")
+    del text
+    out = tmp_path / "p"
+    code, _, err = run_cli("basins", EXAMPLES / "shakedown_triangle.toml", "--out", out,
+                           "--protocols", protos, "--workers", "1", "--no-progress")
+    assert code == 0, err
+    s = json.loads((out / "summary.json").read_text())
+    assert s["starts"] == 2
+    # the example's comment: this protocol shakes down
+    assert s["class_counts"].get("shakedown", 0) >= 1
