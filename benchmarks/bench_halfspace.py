@@ -48,6 +48,7 @@ def _tamaas_row():
     except ImportError:
         return [{"name": "Tamaas PolonskyKeerTan 256² Cattaneo (not installed: skipped)",
                  "value": float("nan"), "unit": "s"}]
+    tm.set_log_level(tm.LogLevel.warning)  # keep its iteration log out of the table
     N, L, R, E, nu, f, ratio = 256, 1.0, 2.0, 1.0, 0.3, 0.5, 0.5
     pbar = 2e-4                                    # mean pressure over the periodic cell
     model = tm.ModelFactory.createModel(tm.model_type.surface_2d, [L, L], [N, N])
