@@ -34,19 +34,10 @@ def add_parser(sub) -> None:
     p.set_defaults(execute=execute)
 
 
-def _axis(sec, key, default, lo, hi, geometric=True):
-    if not sec.has(key):
-        a, b, n = default["start"], default["stop"], default["num"]
-        return np.geomspace(a, b, n) if geometric else np.linspace(a, b, n)
-    raw = sec.data[key]
-    if isinstance(raw, dict):
-        sub = sec.table(key)
-        a, b = sub.float("start", gt=lo, le=hi), sub.float("stop", gt=lo, le=hi)
-        n = sub.int("num", ge=1, le=10000)
-        sub.finish()
-        return np.geomspace(a, b, n) if geometric else np.linspace(a, b, n)
-    sec._get(key, default)
-    return np.sort(np.atleast_1d(sec.coerce_array(key, raw, gt=lo, le=hi)).ravel())
+def _axis(sec, key, default, **bounds):
+    """A grid axis; values given as a list are sorted."""
+    vals = sec.grid(key, default, max_num=10000, **bounds)
+    return vals if isinstance(sec.data.get(key, default), dict) else np.sort(vals)
 
 
 def parse_limits(case, tolerance: float):
@@ -59,10 +50,11 @@ def parse_limits(case, tolerance: float):
     if isinstance(load, dict) and "frequency_ratio" not in load and "frequency" not in load:
         load["frequency_ratio"] = 1.0  # the sweep sets the frequency
     sec = case.section("limits", required=False)
-    ratios = _axis(sec, "frequency_ratio", {"start": 0.01, "stop": 3.0, "num": 40}, 0.0, 1e3)
-    amps = _axis(sec, "amplitude_ratio", {"start": 0.3, "stop": 3.0, "num": 20}, 0.0, 1e4)
-    pos = _axis(sec, "position", {"start": 0.1, "stop": 0.9, "num": 9}, 0.0, 0.999,
-                geometric=False)
+    ratios = _axis(sec, "frequency_ratio", {"start": 0.01, "stop": 3.0, "num": 40},
+                   gt=0.0, le=1e3, geometric=True)
+    amps = _axis(sec, "amplitude_ratio", {"start": 0.3, "stop": 3.0, "num": 20},
+                 gt=0.0, le=1e4, geometric=True)
+    pos = _axis(sec, "position", {"start": 0.1, "stop": 0.9, "num": 9}, gt=0.0, le=0.999)
     npf = sec.int("position_frequencies", 20, ge=2, le=1000)
     rc = parse_case(case)
     return rc, ratios, amps, pos, npf

@@ -4,8 +4,8 @@ The case names ``model = "halfspace"`` and holds a ``[map]`` table whose keys ``
 ``Q1_hat`` and ``phase`` are each a list of values or a table ``{start, stop, num}``; the
 optional ``fig7_P1_hat`` (default 0.4) and ``fig7_Q1_hat`` (default [0.2, 0.4, 0.6, 0.8])
 select the curves of seed 001 Fig. 7, and ``[run]`` may set ``steps_per_cycle`` and
-``sliders``. A ``[halfspace]`` table, if present, is only used to convert Ŵ to physical
-dissipation W = λ_c γσ f² P0 Ŵ for its rough profile and ``[loading].P0``.
+``sliders``. ``[halfspace]`` and ``[loading]`` tables may be present (so a run case can
+carry its map) and are not used: Ŵ is dimensionless; W = λ_c γσ f² P0 Ŵ.
 """
 
 from __future__ import annotations
@@ -26,33 +26,22 @@ def add_parser(sub) -> None:
     p.set_defaults(execute=execute)
 
 
-def _axis(sec, key, default, lo, hi):
-    raw = sec.data.get(key, default)
-    if isinstance(raw, dict):
-        sub = sec.table(key)
-        vals = np.linspace(sub.float("start", ge=lo, le=hi), sub.float("stop", ge=lo, le=hi),
-                           sub.int("num", ge=1, le=100000))
-        sub.finish()
-        return vals
-    return np.atleast_1d(sec.coerce_array(key, sec._get(key, default), shape=None, ge=lo,
-                                          le=hi)).ravel()
-
-
 def parse_map_case(case):
     """Grid and settings of a map case (raises CaseError)."""
     sec = case.section("map")
-    P1 = _axis(sec, "P1_hat", {"start": 0.0, "stop": 0.8, "num": 9}, 0.0, 0.999999)
-    Q1 = _axis(sec, "Q1_hat", {"start": 0.05, "stop": 0.95, "num": 19}, 0.0, 1.0)
-    ph = _axis(sec, "phase", {"start": -np.pi, "stop": np.pi, "num": 37}, -2 * np.pi, 2 * np.pi)
+    P1 = sec.grid("P1_hat", {"start": 0.0, "stop": 0.8, "num": 9}, ge=0.0, le=0.999999)
+    Q1 = sec.grid("Q1_hat", {"start": 0.05, "stop": 0.95, "num": 19}, ge=0.0, le=1.0)
+    ph = sec.grid("phase", {"start": -np.pi, "stop": np.pi, "num": 37}, ge=-2 * np.pi,
+                  le=2 * np.pi)
     fig_P1 = sec.float("fig7_P1_hat", 0.4, ge=0.0, lt=1.0)
     fig_Q1 = np.atleast_1d(sec.array("fig7_Q1_hat", [0.2, 0.4, 0.6, 0.8], ge=0.0, le=1.0))
     run = case.section("run", required=False)
     settings = {"steps_per_cycle": run.int("steps_per_cycle", 200, ge=16),
                 "n_sliders": run.int("sliders", 100, ge=10, le=100000)}
-    # ignore the physical tables except for unit conversion
+    # a run case may carry a [map] table: its physical tables are accepted, not used
     for name in ("halfspace", "loading"):
         if name in case.data:
-            case.section(name).data.clear()
+            case.section(name).ignore()
     case.finish()
     return P1, Q1, ph, fig_P1, fig_Q1, settings
 

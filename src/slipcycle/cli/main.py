@@ -30,13 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"slipcycle.cli.cmd_{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"slipcycle.cli.cmd_{name}":
-                continue  # command not implemented in this version
-            raise
-        module.add_parser(sub)
+        importlib.import_module(f"slipcycle.cli.cmd_{name}").add_parser(sub)
     return parser
 
 

@@ -21,12 +21,4 @@ MODEL_RUNNERS = {
 def run_model(case: Case) -> RunOutputs:
     """Dispatch ``case`` to its model's ``run_case``."""
     module_name, func = MODEL_RUNNERS[case.model].split(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as exc:
-        if exc.name and exc.name.startswith(module_name.rsplit(".", 1)[0]):
-            from slipcycle.io import CaseError
-
-            raise CaseError("model", f"model {case.model!r} is not implemented yet") from None
-        raise
-    return getattr(module, func)(case)
+    return getattr(importlib.import_module(module_name), func)(case)

@@ -187,6 +187,8 @@ def run_history(
     slider_diss, global_diss = [], []
     steady, change = False, np.inf
     last_t = last_z = None
+    # largest Coulomb limit of the cycle: the scale of the steadiness residual
+    cap_max = bed.friction * float(np.max(kn * np.maximum(Uc.max() - level, 0.0)))
     c = 0
     while gross is None and c < max_cycles:
         t_start, z_start, d_start = t.copy(), z.copy(), d.copy()
@@ -202,7 +204,6 @@ def run_history(
             last_t = np.vstack([t_start[None], rt])
             last_z = np.vstack([z_start[None], rz])
         V_prev, Q_prev = float(Vc[-1]), float(Qc[-1])
-        cap_max = bed.friction * float(np.max(kn * np.maximum(Uc.max() - level, 0.0)))
         change = float(np.max(np.abs(t - t_start))) / cap_max if cap_max > 0 else 0.0
         c += 1
         if change <= steady_tol and c >= min_cycles:

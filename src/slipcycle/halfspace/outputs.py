@@ -30,8 +30,7 @@ def stick_history(bed: SliderBed, result: HistoryResult) -> tuple[np.ndarray, np
     full = result.first_slip >= bed.size
     P_S = np.where(full, result.P, np.minimum(P_S, result.P))
     if size is not None:
-        a = bed.edge_size
-        a_now = np.interp(result.P, bed.edge_load, a)
+        a_now = np.interp(result.P, bed.edge_load, bed.edge_size)
         size = np.where(full, a_now, np.minimum(size, a_now))
     return P_S, size
 
@@ -137,8 +136,8 @@ def _add_tractions(ds: xr.Dataset, model, bed, result) -> None:
     S = model.steps_per_cycle
     theta = np.linspace(0, 2 * np.pi, S + 1)
     k = np.clip(np.round(np.asarray(model.snapshots) / (2 * np.pi) * S).astype(int), 0, S)
-    last_U = np.concatenate([[result.U[result.cycle == result.cycle.max()][-1]],
-                             result.U[result.cycle == result.cycle.max()]])
+    U_last = result.U[result.cycle == result.cycle.max()]
+    last_U = np.concatenate([U_last[-1:], U_last])   # θ = 0 repeats θ = 2π
     nforce = bed.normal_stiffness[None, :] * np.maximum(last_U[k, None] - bed.level[None, :], 0)
     ds.coords["radius"] = ("radius", ops.radius, {"units": "m"})
     ds.coords["snapshot_theta"] = ("snapshot", theta[k], {"units": "rad"})

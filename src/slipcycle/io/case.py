@@ -192,6 +192,30 @@ class Section:
         _check_bounds(self, key, arr, gt, ge, lt, le)
         return arr
 
+    def grid(self, key: str, default: dict, *, gt: float | None = None,
+             ge: float | None = None, le: float | None = None, geometric: bool = False,
+             max_num: int = 100_000) -> np.ndarray:
+        """A 1-D grid: a list of values, or a table ``{start, stop, num}`` (``default``).
+
+        The table form gives ``num`` values from ``start`` to ``stop`` inclusive, equally
+        spaced (or geometrically, with ``geometric``); bounds apply to every value.
+        """
+        raw = self.data.get(key, default)
+        if isinstance(raw, dict):
+            sub = self.table(key) if self.has(key) else Section(raw, self.key(key),
+                                                                  self.base_dir)
+            self._used.add(key)
+            a = sub.float("start", gt=gt, ge=ge, le=le)
+            b = sub.float("stop", gt=gt, ge=ge, le=le)
+            n = sub.int("num", ge=1, le=max_num)
+            sub.finish()
+            return np.geomspace(a, b, n) if geometric else np.linspace(a, b, n)
+        return np.atleast_1d(self.array(key, gt=gt, ge=ge, le=le)).ravel()
+
+    def ignore(self) -> None:
+        """Accept every key of this table unread (a table another command uses)."""
+        self._used.update(self.data)
+
     # -- nested tables -------------------------------------------------------------------
     def table(self, key: str, default: Any = _MISSING) -> Section | None:
         raw = self._get(key, default)

@@ -109,7 +109,7 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
         )
         if outputs.dataset is not None:
             ds = outputs.dataset.copy()
-            ds.attrs.update({k: v for k, v in meta.items()})
+            ds.attrs.update(meta)
             ds.to_netcdf(stage / "result.nc")
         if outputs.figures:
             (stage / "figures").mkdir()
