@@ -17,7 +17,7 @@ from slipcycle.discrete.basins import (
     run_records,
 )
 from slipcycle.discrete.case import read_discrete_case
-from slipcycle.discrete.fastcycle import steady_state_fast
+from slipcycle.discrete.fastcycle import steady_state_fast, steady_states_batch
 from slipcycle.discrete.shakedown import (
     lambda1,
     lambda2,
@@ -114,6 +114,76 @@ def test_box_counting_smooth_and_rough():
     noise = np.random.default_rng(0).integers(0, 2, (n, n))
     assert box_counting_dimension(noise)["dimension"] == pytest.approx(2.0, abs=0.05)
     assert np.isnan(box_counting_dimension(np.zeros((64, 64), int))["dimension"])
+    # the edge of the admissible region is not a basin boundary
+    assert np.isnan(box_counting_dimension(disc, valid=disc == 1)["dimension"])
+
+
+def _cantor_labels(n: int) -> np.ndarray:
+    """Two classes alternating with the level at which x first falls in a removed middle
+    third: their boundary is (middle-thirds Cantor set) × [0, 1]."""
+    y = (np.arange(n) + 0.5) / n
+    lab = np.zeros(n, int)
+    found = np.zeros(n, bool)
+    for level in range(40):
+        digit = np.floor(3 * y)
+        hit = (digit == 1) & ~found
+        lab[hit] = level % 2
+        found |= hit
+        y = 3 * y - digit
+    return np.repeat(lab[:, None], n, axis=1)
+
+
+def test_box_counting_recovers_a_known_fractal_dimension():
+    # Cantor × interval: dimension 1 + log 2 / log 3 = 1.6309
+    exact = 1 + np.log(2) / np.log(3)
+    for n in (243, 729):
+        dim = box_counting_dimension(_cantor_labels(n))["dimension"]
+        assert dim == pytest.approx(exact, abs=0.03)
+
+
+@pytest.fixture(scope="module")
+def unstable():
+    return read_discrete_case(read_case(EXAMPLES / "unstable_two_node.toml"))
+
+
+def test_unstable_steady_states_amplify_perturbations(unstable):
+    """Seed 001 §3.1: with strong coupling a periodic state can be unstable, so that small
+    perturbations grow with successive cycles. Two starts 1e-9 m apart separate by more
+    than 1e4× within 40 cycles, whatever the load step (so not a discretisation effect),
+    and the general event-driven solver follows the compiled kernel while they are close.
+    """
+    system, load = unstable.system, unstable.load
+    v0 = np.asarray(unstable.initial_slip, float)
+    pair = np.array([v0, v0 + [1e-9, 0.0]])
+    for steps in (64, 256):
+        far = steady_states_batch(system, load, pair, cycles=40, steps_per_cycle=steps,
+                                  tol=0.0, min_cycles=40)
+        gap = np.abs(far["final_slip"][0] - far["final_slip"][1]).max()
+        assert gap > 1e4 * 1e-9
+        assert np.all(far["steady_state"] == "not_converged")
+    near = steady_states_batch(system, load, v0[None], cycles=8, steps_per_cycle=256,
+                               tol=0.0, min_cycles=8)
+    ref = simulate(system, load, initial_slip=v0, cycles=8, steps_per_cycle=256, tol=0.0,
+                   min_cycles=8)
+    assert np.allclose(near["final_slip"][0], ref.x[-1, -1, :2], atol=1e-7)
+    # aperiodic: the dissipation per cycle keeps changing (between ~1.0 and ~2.6 J)
+    hist = np.asarray(ref.dissipation_history)
+    assert np.ptp(hist[-4:]) > 0.05 * np.mean(hist[-4:])
+
+
+def test_well_posed_despite_expanding_slope_product(unstable):
+    """The expansion comes from a negative slope product k1+ k2- < -1 of the two slip
+    lines, which the P-matrix condition allows (only positive products must stay < 1)."""
+    from slipcycle.discrete.wellposed import critical_friction
+
+    A, B = unstable.system.A, unstable.system.B
+    f = float(unstable.system.friction[0])
+    assert critical_friction(A, B, f).f_crit > f
+    k1 = {s: (A[0, 1] + s * f * B[0, 1]) / (A[0, 0] + s * f * B[0, 0]) for s in (1, -1)}
+    k2 = {s: (A[1, 0] + s * f * B[1, 0]) / (A[1, 1] + s * f * B[1, 1]) for s in (1, -1)}
+    products = [k1[a] * k2[b] for a in (1, -1) for b in (1, -1)]
+    assert max(products) < 1.0                      # P-matrix (well-posed corners)
+    assert min(products) < -2.0                     # expanding pair
 
 
 def test_shakedown_command(run_cli, tmp_path, tri):

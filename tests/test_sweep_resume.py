@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import operator
 from functools import partial
 from pathlib import Path
 
@@ -12,7 +13,7 @@ import xarray as xr
 
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.case import apply_overrides, make_task, parse_set
-from slipcycle.sweep.core import parse_values
+from slipcycle.sweep.core import TaskRunner, parse_values, worker_threads
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 CASE = EXAMPLES / "shakedown_triangle.toml"
@@ -90,6 +91,38 @@ def test_worker_failure_keeps_finished_cells_and_resume_completes(tmp_path, refe
     _same(st.read(), reference)
 
 
+def slow_first_then_fail(params, inner, fail_on):
+    """The grid's first cell is slow; ``fail_on`` fails at once: after the second cell
+    finished but before the first one did, so before the store exists."""
+    import time
+
+    if params == fail_on:
+        raise RuntimeError("worker failure")
+    if params == {a.name: a.values[0] for a in AXES}:
+        time.sleep(2.0)
+    return inner(params)
+
+
+def test_failure_before_the_store_exists_keeps_finished_cells(tmp_path, reference):
+    """The store is created from the first cell's result; a task failing before that
+    still leaves the cells that finished (first cell included) for --resume."""
+    from slipcycle.sweep.core import SweepStore
+
+    path = tmp_path / "s.zarr"
+    task = make_task(small_text(), CASE)
+    bad = partial(slow_first_then_fail, inner=task,
+                  fail_on={"loading.lam": 1.0, "discrete.friction": 0.45})
+    with pytest.raises(RuntimeError, match="worker failure"):
+        run_sweep(bad, AXES, path, description={"t": 1}, workers=2, progress=False)
+    st = SweepStore(path, AXES, "")
+    st.group = __import__("zarr").open_group(str(path), mode="r")
+    done = st.done()
+    assert done[0, 0] and done[0, 1] and not done[1, 0]
+    st = run_sweep(task, AXES, path, description={"t": 1}, resume=True, workers=1,
+                   progress=False)
+    _same(st.read(), reference)
+
+
 def test_dask_cluster_gives_identical_results(tmp_path, reference):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
@@ -97,7 +130,34 @@ def test_dask_cluster_gives_identical_results(tmp_path, reference):
         st = run_sweep(make_task(small_text(), CASE), AXES, tmp_path / "d.zarr",
                        description={"t": 1}, scheduler=cluster.scheduler_address,
                        progress=False)
+        _same(st.read(), reference)
+        st = run_sweep(make_task(small_text(), CASE), AXES, tmp_path / "g.zarr",
+                       description={"t": 1}, scheduler=cluster.scheduler_address,
+                       progress=False, group_by=("discrete.friction",))
+        _same(st.read(), reference)
+        with TaskRunner(scheduler=cluster.scheduler_address) as runner:
+            assert runner.map(operator.itemgetter("x"), [{"x": 3}, {"x": 4}]) == [3, 4]
+
+
+def test_grouped_tasks_stop_resume_and_processes_are_identical(tmp_path, reference):
+    """Cells sharing a λ form one task (one worker, one Zarr write per output); results
+    do not depend on grouping, interruption or the number of processes."""
+    task = make_task(small_text(), CASE)
+    path = tmp_path / "g.zarr"
+    st = run_sweep(task, AXES, path, description={"t": 1}, workers=1, progress=False,
+                   stop_after=3, group_by=("loading.lam",))
+    assert st.done().sum() == 3 and st.done()[0].all() and st.done()[1].sum() == 1
+    st = run_sweep(task, AXES, path, description={"t": 1}, workers=2, progress=False,
+                   resume=True, group_by=("loading.lam",))
     _same(st.read(), reference)
+    with pytest.raises(SweepError, match="group_by"):
+        run_sweep(task, AXES, tmp_path / "x.zarr", workers=1, progress=False,
+                  group_by=("nosuch",))
+    with TaskRunner(workers=2) as runner:          # a pool kept across calls, in order
+        get = operator.itemgetter("x")
+        assert runner.map(get, [{"x": i} for i in range(5)]) == [0, 1, 2, 3, 4]
+        assert runner.map(get, [{"x": 7}, {"x": 8}]) == [7, 8]
+    assert worker_threads(2) >= 1 and worker_threads(10**6) == 1
 
 
 def test_parse_values_and_overrides():

@@ -209,7 +209,9 @@ def execute(args: argparse.Namespace) -> int:
     if mode == "grid":
         import xarray as xr
 
-        bc = box_counting_dimension(cls)
+        # boundaries between admissible starts only: the edge of the admissible region
+        # is smooth and says nothing about the dynamics
+        bc = box_counting_dimension(cls, valid=adm)
         summary["boundary_box_counting_dimension"] = bc["dimension"]
         summary["box_counting"] = bc
         summary["grid"] = [int(args.grid), int(args.grid)]

@@ -7,10 +7,15 @@ bisection), and brackets of λ3 (every node slips in every steady cycle) and λ4
 slip or separate at one instant) from simulations over ``--lam-points`` values of λ in
 [0, ``--lam-max``] (default 2 λ2) and ``--starts`` random admissible initial slips plus the
 case's own initial condition. The simulation runs go through the sweep machinery
-(``DIR/scan.zarr``, ``--resume``, ``--workers``, ``--scheduler``).
+(``DIR/scan.zarr``, ``--resume``, ``--workers``, ``--scheduler``). The grid brackets are
+then narrowed by bisection in λ to ``--lam-tol`` × lam_max, each trial λ simulated from
+the same starts (same seeding rule); trial runs are checkpointed in ``DIR/refine.json``
+after every step, so ``--resume`` does not recompute them.
 
-summary.json: ``lambda1``, ``lambda2``, ``lambda3_bracket``, ``lambda4_bracket``, the
-extreme constraint data, the runs supporting each bracket, and the case's own run.
+summary.json: ``lambda1``, ``lambda2``, ``lambda3_bracket``, ``lambda4_bracket`` (refined)
+and ``lambda3_grid_bracket``, ``lambda4_grid_bracket``, the extreme constraint data, the
+runs supporting each bracket (``lambda3_evidence``, ``lambda4_evidence``: the runs at the
+final lo and hi), ``refinement`` (trial λ values, number of runs), and the case's own run.
 """
 
 from __future__ import annotations
@@ -37,6 +42,9 @@ def add_parser(sub) -> None:
     p.add_argument("--starts", type=int, default=8, help="random initial slips per λ")
     p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--tol", type=float, default=1e-9, help="relative tolerance of λ1")
+    p.add_argument("--lam-tol", type=float, default=1e-3,
+                   help="width to which the λ3/λ4 brackets are bisected, relative to "
+                        "lam_max (1: no refinement)")
     add_common(p)
     p.set_defaults(execute=execute)
 
@@ -80,6 +88,7 @@ def execute(args: argparse.Namespace) -> int:
         lambda1,
         lambda2,
         polygon_vertices,
+        refine_brackets,
         safe_region,
         simulation_brackets,
     )
@@ -87,6 +96,7 @@ def execute(args: argparse.Namespace) -> int:
     from slipcycle.plot import shakedown as plots
     from slipcycle.sweep import Axis, SweepError, run_sweep
     from slipcycle.sweep.case import STEADY_CODES
+    from slipcycle.sweep.core import TaskRunner
 
     case = read_case(args.case, models=["discrete"])
     cpath = str(case.path) if case.path else None
@@ -99,6 +109,9 @@ def execute(args: argparse.Namespace) -> int:
         raise CaseError("--lam-max", f"must be a finite number > 0, got {args.lam_max}")
     if not 0 < args.tol < 1:
         raise CaseError("--tol", f"must be in (0, 1), got {args.tol}")
+    if not (np.isfinite(args.lam_tol) and 0 < args.lam_tol <= 1):
+        raise CaseError("--lam-tol", f"must be in (0, 1] (a fraction of lam_max), got "
+                        f"{args.lam_tol}")
     n = dc.system.n_nodes
     t0 = time.perf_counter()
     region = safe_region(dc.system, dc.load)
@@ -113,38 +126,38 @@ def execute(args: argparse.Namespace) -> int:
     axes = [Axis("lam", lams), Axis("start", tuple(range(args.starts + 1)))]
     fn = partial(lam_start_task_ref(), case_text=case.text, case_path=cpath,
                  n_random=args.starts, seed=args.seed)
-    try:
-        store = run_sweep(fn, axes, Path(args.out) / "scan.zarr",
-                          description={"case": case.text, "lams": lams,
-                                       "starts": args.starts, "seed": args.seed},
-                          resume=args.resume, workers=args.workers, scheduler=args.scheduler,
-                          progress=not args.no_progress, stop_after=args.stop_after,
-                          desc="λ scan")
-    except SweepError as exc:
-        raise as_case_error(exc) from None
-    done = store.done()
-    if not done.all():
-        print(f"stopped with {int(done.sum())} of {done.size} runs done; complete it with "
-              "--resume", flush=True)
-        return 0
-    data = store.read()
-    cls = data["steady_state"]
-    recs = []
-    for i, lam in enumerate(lams):
-        for s in range(args.starts + 1):
-            if cls[i, s] == STEADY_CODES.index("inadmissible"):
-                continue
-            recs.append((lam, "case" if s == 0 else f"random {s}", {
-                "steady_state": STEADY_CODES[int(cls[i, s])],
-                "dissipation_per_cycle": float(data["dissipation_per_cycle"][i, s]),
-                "n_slipping": int(data["n_slipping"][i, s]),
-                "memory_erased": bool(data["memory_erased"][i, s]),
-                "cycles_run": int(data["cycles_run"][i, s])}))
-    br = simulation_brackets(recs, n)
-
-    def evidence(bracket):
-        lo, hi = bracket
-        return [r for r in br.runs if r["lam"] in (lo, hi)]
+    lam_tol = args.lam_tol * lam_max
+    ckpt = Path(args.out) / "refine.json"
+    # one pool (or Dask client) for the scan and the bisection
+    with TaskRunner(args.workers, args.scheduler) as runner:
+        try:
+            store = run_sweep(fn, axes, Path(args.out) / "scan.zarr",
+                              description={"case": case.text, "lams": lams,
+                                           "starts": args.starts, "seed": args.seed},
+                              resume=args.resume, runner=runner,
+                              progress=not args.no_progress, stop_after=args.stop_after,
+                              desc="λ scan", group_by=("lam",))
+        except SweepError as exc:
+            raise as_case_error(exc) from None
+        done = store.done()
+        if not done.all():
+            print(f"stopped with {int(done.sum())} of {done.size} runs done; complete it "
+                  "with --resume", flush=True)
+            return 0
+        data = store.read()
+        cls = data["steady_state"]
+        recs = []
+        for i, lam in enumerate(lams):
+            for s in range(args.starts + 1):
+                if cls[i, s] == STEADY_CODES.index("inadmissible"):
+                    continue
+                recs.append((lam, _label(s), _record({k: v[i, s] for k, v in data.items()})))
+        br = simulation_brackets(recs, n)
+        trials = _Trials(runner, fn, args.starts, ckpt, {
+            "case": case.text, "starts": args.starts, "seed": args.seed}, args.resume,
+            not args.no_progress)
+        ref = refine_brackets(br, trials, lam_tol, n)
+    trial_lams = sorted(ref.trials)
 
     own = run_record(dc.system, dc.load, initial_slip=dc.initial_slip, protocol=dc.protocol,
                      **{"cycles": dc.run["cycles"], "steps_per_cycle":
@@ -156,7 +169,10 @@ def execute(args: argparse.Namespace) -> int:
     summary = {
         "model": "discrete", "analysis": "shakedown", "n_nodes": n,
         "lambda1": l1, "lambda1_bracket": list(l1info["bracket"]), "lambda2": l2,
-        "lambda3_bracket": list(br.lambda3_bracket), "lambda4_bracket": list(br.lambda4_bracket),
+        "lambda3_bracket": list(ref.brackets["lambda3"]),
+        "lambda4_bracket": list(ref.brackets["lambda4"]),
+        "lambda3_grid_bracket": list(br.lambda3_bracket),
+        "lambda4_grid_bracket": list(br.lambda4_bracket),
         "redundant_above_lambda1": [names[k] for k in l1info["redundant_above"]],
         "extreme_method": region.method,
         "constraints": {"names": names, "G": region.G, "h0": region.h0, "m": region.m,
@@ -165,8 +181,16 @@ def execute(args: argparse.Namespace) -> int:
         "lam": lam_case, "regime": regime,
         "steady_state": STEADY_CODES[int(own["steady_state"])],
         "dissipation_per_cycle": float(own["dissipation_per_cycle"]),
-        "lambda3_evidence": evidence(br.lambda3_bracket),
-        "lambda4_evidence": evidence(br.lambda4_bracket),
+        "lambda3_evidence": ref.evidence["lambda3"],
+        "lambda4_evidence": ref.evidence["lambda4"],
+        "refinement_runs": ref.runs,
+        "refinement": {
+            "lam_tol": lam_tol, "lam_tol_relative": args.lam_tol,
+            "method": "bisection in λ from the grid brackets, every start at every trial "
+                      "λ; assumes the criterion is monotone in λ above the bracket",
+            "trial_lam": trial_lams, "runs": ref.runs, "runs_computed": trials.computed,
+            "steps": {k: [[lam, ok] for lam, ok in v] for k, v in ref.steps.items()},
+            "checkpoint": str(ckpt)},
         "scan": {"lam": list(lams), "starts": args.starts + 1, "seed": args.seed,
                  "store": str(Path(args.out) / "scan.zarr"),
                  "class_counts": {STEADY_CODES[c]: int((cls == c).sum())
@@ -192,9 +216,22 @@ def execute(args: argparse.Namespace) -> int:
         coords={"lam": ("lam", np.array(lams), {"units": "1"}),
                 "start": ("start", np.arange(args.starts + 1), {"units": "1"})})
     ds.attrs.update({"lambda1": l1, "lambda2": l2 if np.isfinite(l2) else -1.0})
+    trial = trials.arrays(trial_lams, n)
+    if trial_lams:
+        tdims = ("trial_lam", "start")
+        ds = ds.assign_coords(trial_lam=("trial_lam", np.array(trial_lams), {"units": "1"}))
+        ds["trial_steady_state"] = (tdims, trial["steady_state"], {
+            "units": "1", "flag_meanings": " ".join(STEADY_CODES)})
+        ds["trial_dissipation_per_cycle"] = (tdims, trial["dissipation_per_cycle"],
+                                             {"units": "J"})
+        ds["trial_n_slipping"] = (tdims, trial["n_slipping"], {"units": "1"})
+        ds["trial_memory_erased"] = (tdims, trial["memory_erased"], {"units": "1"})
+        ds["trial_initial_slip"] = (tdims + ("node",), trial["initial_slip"], {"units": "m"})
     figures = {"dissipation_vs_lambda": lambda: plots.dissipation_vs_lambda(
         np.array(lams), data["dissipation_per_cycle"], cls, l1, l2, br.lambda3_bracket,
-        br.lambda4_bracket)}
+        br.lambda4_bracket, refined=ref.brackets,
+        trials=(np.array(trial_lams), trial["dissipation_per_cycle"],
+                trial["steady_state"]) if trial_lams else None)}
     if n == 2 and np.isfinite(l2):
         figures["safe_region_panels"] = lambda: plots.safe_region_panels(
             region, _panels(dc, region, l1, l2, lam_case, args.seed), l1, l2)
@@ -205,6 +242,109 @@ def execute(args: argparse.Namespace) -> int:
                      default=str))
     print(f"results written to {args.out}/")
     return 0
+
+
+def _label(s: int) -> str:
+    return "case" if s == 0 else f"random {s}"
+
+
+def _record(cell: dict) -> dict:
+    """A scan cell (codes, NumPy scalars) as a run record for the brackets."""
+    from slipcycle.sweep.case import STEADY_CODES
+
+    return {"steady_state": STEADY_CODES[int(cell["steady_state"])],
+            "dissipation_per_cycle": float(cell["dissipation_per_cycle"]),
+            "n_slipping": int(cell["n_slipping"]),
+            "memory_erased": bool(cell["memory_erased"]),
+            "cycles_run": int(cell["cycles_run"])}
+
+
+class _Trials:
+    """``evaluate`` of :func:`~slipcycle.discrete.shakedown.refine_brackets`: runs every
+    start at the trial λ values (in parallel through ``runner``) and keeps them in a JSON
+    checkpoint, rewritten atomically after every step and re-used by ``--resume``.
+
+    The checkpoint maps ``repr(λ)`` (exact round trip) to the trial's cell records and
+    carries a fingerprint of what they depend on (case text, number of starts, seed).
+    Records of a trial λ do not depend on the grid or on ``--lam-tol``, so a resumed run
+    with a smaller tolerance re-uses the trials of a coarser one.
+    """
+
+    def __init__(self, runner, fn, starts: int, path: Path, depends: dict, resume: bool,
+                 progress: bool):
+        from slipcycle.sweep.core import fingerprint
+
+        self.runner, self.fn, self.starts, self.path = runner, fn, starts, path
+        self.fp = fingerprint(depends)
+        self.cells: dict[str, list] = {}
+        self.computed = 0            # runs computed in this call (not from the checkpoint)
+        self.progress = progress
+        if resume and path.exists():
+            try:
+                data = json.loads(path.read_text())
+            except (OSError, ValueError):
+                data = {}
+            if data.get("fingerprint") == self.fp:
+                self.cells = data.get("trials", {})
+
+    def __call__(self, lams: list[float]) -> dict:
+        todo = [lam for lam in lams if repr(lam) not in self.cells]
+        if todo:
+            t0 = time.perf_counter()
+            params = [{"lam": lam, "start": s} for lam in todo for s in range(self.starts + 1)]
+            out = self.runner.map(self.fn, params)
+            self.computed += len(out)
+            k = self.starts + 1
+            for j, lam in enumerate(todo):
+                self.cells[repr(lam)] = [
+                    {**_record(r), "initial_slip": np.asarray(r["initial_slip"]).tolist()}
+                    for r in out[j * k:(j + 1) * k]]
+            self._save()
+            if self.progress:
+                import sys
+
+                print(f"λ bisection: {len(params)} runs at λ = "
+                      f"{', '.join(f'{lam:.6g}' for lam in todo)} "
+                      f"({time.perf_counter() - t0:.1f} s)", file=sys.stderr, flush=True)
+        res = {}
+        for lam in lams:
+            res[lam] = [(_label(s), {k: v for k, v in c.items() if k != "initial_slip"})
+                        for s, c in enumerate(self.cells[repr(lam)])
+                        if c["steady_state"] != "inadmissible"]
+        return res
+
+    def arrays(self, lams: list, n: int) -> dict:
+        """Trial runs as (trial λ, start) arrays (codes; NaN where not admissible)."""
+        from slipcycle.sweep.case import STEADY_CODES
+
+        T, S = len(lams), self.starts + 1
+        out = {"steady_state": np.zeros((T, S), np.int64),
+               "dissipation_per_cycle": np.full((T, S), np.nan),
+               "n_slipping": np.full((T, S), -1, np.int64),
+               "memory_erased": np.zeros((T, S), bool),
+               "initial_slip": np.full((T, S, n), np.nan)}
+        for i, lam in enumerate(lams):
+            for s, r in enumerate(self.cells[repr(lam)]):
+                out["steady_state"][i, s] = STEADY_CODES.index(r["steady_state"])
+                out["dissipation_per_cycle"][i, s] = r["dissipation_per_cycle"]
+                out["n_slipping"][i, s] = r["n_slipping"]
+                out["memory_erased"][i, s] = r["memory_erased"]
+                out["initial_slip"][i, s] = np.asarray(r["initial_slip"], float)
+        return out
+
+    def _save(self) -> None:
+        import os
+        import tempfile
+
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=".refine-", suffix=".json", dir=self.path.parent)
+        try:
+            with os.fdopen(fd, "w") as fh:
+                json.dump({"fingerprint": self.fp, "trials": self.cells}, fh)
+            os.replace(tmp, self.path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
 
 
 def lam_start_task_ref():

@@ -185,8 +185,14 @@ def lam_start_task(params: dict, case_text: str, case_path, n_random: int, seed:
 
     Start 0 is the case's own initial condition (its ``initial_slip`` if admissible at
     this λ, its protocol, or monotonic loading from the unloaded state); starts 1..K are
-    random admissible slip states (:func:`sample_initial_slips`, seeded by ``seed`` and
-    λ's position so that results are reproducible).
+    random admissible slip states at this λ (:func:`sample_initial_slips` with ``seed``:
+    the same random stream at every λ, applied to the vertices of the polytope admissible
+    at θ = 0 for this λ), so a cell's result depends only on (case, λ, start, K, seed) —
+    not on the process, the order of cells or which other cells are run.
+
+    The K random starts of one λ (24 LPs for N = 200, ≈ 1 s) are computed once per
+    process and λ (:func:`_starts`); sweeps group the cells of one λ into one task
+    (``run_sweep(..., group_by=("lam",))``) so that they are computed once per λ in all.
     """
     dc = load_discrete_case(case_text, case_path)
     lam = float(params["lam"])
@@ -207,23 +213,27 @@ def lam_start_task(params: dict, case_text: str, case_path, n_random: int, seed:
         if V.shape[0] < s:
             rec = _empty_record(n, INADMISSIBLE)
         else:
-            v0 = V[s - 1]
+            v0 = V[s - 1].copy()
             rec = run_record(dc.system, load, initial_slip=v0, **settings)
     rec["initial_slip"] = v0
     return rec
 
 
-@functools.lru_cache(maxsize=4)
+@functools.lru_cache(maxsize=8)
 def _starts(case_text, case_path, lam, n_random, seed):
+    """The K random starts (K, N) [m] of :func:`lam_start_task` at λ (cached per process;
+    do not modify)."""
     dc = load_discrete_case(case_text, case_path)
     return sample_initial_slips(dc.system, dc.load.with_lam(lam), n_random, seed=seed)
 
 
 # --- box counting ---------------------------------------------------------------------
-def box_counting_dimension(labels: np.ndarray, min_boxes: int = 4) -> dict:
+def box_counting_dimension(labels: np.ndarray, min_boxes: int = 4,
+                           valid: np.ndarray | None = None) -> dict:
     """Box-counting dimension of the boundaries between classes of a 2-D label map.
 
-    A cell is a boundary cell if a 4-neighbour has another label. For box sizes
+    A cell is a boundary cell if a 4-neighbour has another label (both cells ``valid``:
+    the edge of the admissible region is not a basin boundary). For box sizes
     s = 1, 2, 4, … (cells), N(s) boxes contain boundary cells; the dimension is the slope
     of log N(s) against log(1/s) (least squares over sizes with at least ``min_boxes``
     boxes across). A smooth boundary gives ≈ 1, a space-filling (fractal) one up to 2.
@@ -231,6 +241,8 @@ def box_counting_dimension(labels: np.ndarray, min_boxes: int = 4) -> dict:
     Parameters
     ----------
     labels : (n1, n2) int array
+    valid : (n1, n2) bool array, optional
+        Cells that take part (default all), e.g. the admissible starts.
 
     Returns
     -------
@@ -239,9 +251,10 @@ def box_counting_dimension(labels: np.ndarray, min_boxes: int = 4) -> dict:
         ``boundary_cells``.
     """
     L = np.asarray(labels)
+    ok = np.ones(L.shape, bool) if valid is None else np.asarray(valid, bool)
     edge = np.zeros(L.shape, bool)
-    dx = L[1:, :] != L[:-1, :]
-    dy = L[:, 1:] != L[:, :-1]
+    dx = (L[1:, :] != L[:-1, :]) & ok[1:, :] & ok[:-1, :]
+    dy = (L[:, 1:] != L[:, :-1]) & ok[:, 1:] & ok[:, :-1]
     edge[1:, :] |= dx
     edge[:-1, :] |= dx
     edge[:, 1:] |= dy

@@ -22,7 +22,9 @@ iff it satisfies every constraint at its *extreme position*
   shakedown, a triangle does not). It is bracketed by a scan and bisection;
 - λ3 = smallest λ at which every node slips in every steady cycle, λ4 = smallest λ at
   which all nodes slip or separate at one instant; both are bracketed by simulation over
-  λ and a set of initial conditions (:func:`simulation_brackets`).
+  λ and a set of initial conditions (:func:`simulation_brackets`), then the brackets are
+  narrowed by bisection in λ (:func:`refine_brackets`, assumes the criterion monotone
+  above the bracket).
 
 Extreme positions m_k are exact for one harmonic (m = −|c_h|), found by dense sampling
 and bounded Brent refinement for several harmonics, exact at the breakpoints for
@@ -51,7 +53,8 @@ from slipcycle.loading import HarmonicLoad
 
 __all__ = ["SafeRegion", "safe_region", "lambda2", "lambda1", "redundant_constraints",
            "polygon_vertices", "admissible_region_at", "sample_initial_slips",
-           "simulation_brackets", "Brackets", "constraint_names"]
+           "simulation_brackets", "Brackets", "constraint_names", "run_criteria",
+           "refine_brackets", "Refinement"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -458,6 +461,17 @@ def _bracket(lams: np.ndarray, ok: np.ndarray) -> tuple:
     return (float(lams[i - 1]) if i > 0 else 0.0, float(lams[i]))
 
 
+def run_criteria(rec: dict, n_nodes: int) -> dict:
+    """The λ3 and λ4 criteria for one run record (``steady_state`` as a string).
+
+    Returns ``{"lambda3": every node slips in a converged steady cycle, "lambda4": memory
+    erased (all nodes slip or separate at one instant of the steady cycle)}``.
+    """
+    conv = rec["steady_state"] in ("cyclic_slip", "shakedown", "ratcheting")
+    return {"lambda3": bool(conv and rec["n_slipping"] == n_nodes),
+            "lambda4": bool(rec["memory_erased"])}
+
+
 def simulation_brackets(results: list[tuple[float, str, dict]], n_nodes: int) -> Brackets:
     """Brackets of λ3, λ4 from steady-state runs.
 
@@ -474,11 +488,120 @@ def simulation_brackets(results: list[tuple[float, str, dict]], n_nodes: int) ->
     runs = []
     for lam, label, rec in results:
         i = int(np.searchsorted(lams, lam))
-        conv = rec["steady_state"] in ("cyclic_slip", "shakedown", "ratcheting")
-        every_slip[i] &= bool(conv and rec["n_slipping"] == n_nodes)
-        erased[i] &= bool(rec["memory_erased"])
+        ok = run_criteria(rec, n_nodes)
+        every_slip[i] &= ok["lambda3"]
+        erased[i] &= ok["lambda4"]
         runs.append({"lam": float(lam), "start": label, **rec})
     b = Brackets(lams, runs)
     b.lambda3_bracket = _bracket(lams, every_slip)
     b.lambda4_bracket = _bracket(lams, erased)
     return b
+
+
+@dataclass
+class Refinement:
+    """λ3/λ4 brackets refined by bisection (:func:`refine_brackets`).
+
+    Attributes
+    ----------
+    brackets : dict
+        ``"lambda3"``/``"lambda4"`` → (lo, hi): refined brackets (the grid bracket where it
+        could not be refined: hi is None, lo = hi, or lo was not simulated).
+    grid_brackets : dict
+        The brackets of the grid scan.
+    evidence : dict
+        ``"lambda3"``/``"lambda4"`` → the runs at the final lo and hi (dicts as in
+        :attr:`Brackets.runs`).
+    trials : dict
+        Trial λ → its runs (list of dicts as in :attr:`Brackets.runs`), every λ simulated
+        for the bisection, in the order computed.
+    steps : dict
+        ``"lambda3"``/``"lambda4"`` → list of (trial λ, criterion met) in bisection order.
+    """
+
+    brackets: dict
+    grid_brackets: dict
+    evidence: dict
+    trials: dict
+    steps: dict
+
+    @property
+    def runs(self) -> int:
+        """Number of runs at trial λ values."""
+        return sum(len(v) for v in self.trials.values())
+
+
+def refine_brackets(brackets: Brackets, evaluate, tol: float, n_nodes: int,
+                    max_steps: int = 200) -> Refinement:
+    """Bisect the λ3 and λ4 brackets of a grid scan until hi − lo ≤ ``tol``.
+
+    At each step the midpoint of every bracket still wider than ``tol`` is simulated from
+    the whole set of starts (``evaluate``); if every admissible run there meets the
+    criterion (:func:`run_criteria`) it becomes the new hi, else the new lo. The λ3 and λ4
+    bisections advance together, so a step costs at most two trial λ values, and share
+    trial λ values (when their brackets coincide, one simulation serves both).
+
+    The result keeps the definitions: hi is a simulated λ at which every run meets the
+    criterion and lo one at which some run fails it, so the transition lies in (lo, hi].
+    **Bisection assumes the criterion is monotone in λ above lo**, i.e. that it holds
+    for every λ in [hi, grid hi] once it holds at hi; the grid scan checks this only at
+    the grid λ values. If the criterion switched back and forth inside the grid bracket,
+    the refined bracket would still contain *a* transition (fail at lo, pass at hi), but
+    not necessarily the last one, so λ3/λ4 = "smallest λ from which on every run meets
+    the criterion" could lie higher.
+
+    Parameters
+    ----------
+    brackets : Brackets
+        The grid scan (:func:`simulation_brackets`).
+    evaluate : callable
+        ``evaluate(lams) -> {lam: [(start label, record), ...]}`` for a list of λ values:
+        the runs from every start (same starts and seeding rule as the grid scan; records
+        as for :func:`simulation_brackets`; inadmissible starts may be left out or carry
+        ``steady_state == "inadmissible"`` and are skipped).
+    tol : float
+        Absolute width at which a bracket is final (> 0).
+    n_nodes : int
+    max_steps : int
+        Safety limit on bisection steps.
+
+    Returns
+    -------
+    Refinement
+    """
+    if not tol > 0:
+        raise ValueError(f"tol must be > 0, got {tol}")
+    runs_at: dict[float, list] = {}
+    for r in brackets.runs:
+        runs_at.setdefault(float(r["lam"]), []).append(r)
+    trials: dict[float, list] = {}
+    grid = {"lambda3": tuple(brackets.lambda3_bracket),
+            "lambda4": tuple(brackets.lambda4_bracket)}
+    state = {}
+    for name, (lo, hi) in grid.items():
+        if hi is not None and lo is not None and lo < hi and lo in runs_at:
+            state[name] = [float(lo), float(hi)]
+    steps: dict[str, list] = {name: [] for name in grid}
+
+    def passes(name, lam):
+        return all(run_criteria(r, n_nodes)[name] for r in runs_at[lam]
+                   if r["steady_state"] != "inadmissible")
+
+    for _ in range(max_steps):
+        mids = {name: 0.5 * (lo + hi) for name, (lo, hi) in state.items() if hi - lo > tol}
+        if not mids:
+            break
+        new = sorted({m for m in mids.values() if m not in runs_at})
+        if new:
+            got = evaluate(new)
+            for lam in new:
+                runs = [{"lam": float(lam), "start": label, **rec} for label, rec in got[lam]]
+                runs_at[lam] = trials[lam] = runs
+        for name, mid in mids.items():
+            ok = passes(name, mid)
+            steps[name].append((mid, ok))
+            state[name][1 if ok else 0] = mid
+    final = {name: (tuple(state[name]) if name in state else grid[name]) for name in grid}
+    evidence = {name: [r for lam in dict.fromkeys(final[name]) if lam in runs_at
+                       for r in runs_at[lam]] for name in grid}
+    return Refinement(final, grid, evidence, trials, steps)

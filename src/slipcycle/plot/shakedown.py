@@ -102,7 +102,8 @@ def _constraint_names(n):
     return constraint_names(n)
 
 
-def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4) -> Figure:
+def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4, refined=None,
+                          trials=None) -> Figure:
     """Steady dissipation per cycle [J] against λ for every start.
 
     Parameters
@@ -111,7 +112,12 @@ def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4) -> Figu
     dissipation : (L, S) array [J]
     classes : (L, S) int array (class codes)
     lam1, lam2 : float
-    b3, b4 : (lo, hi) brackets of λ3, λ4 (hi may be None)
+    b3, b4 : (lo, hi) grid brackets of λ3, λ4 (hi may be None), shaded
+    refined : dict, optional
+        ``"lambda3"``/``"lambda4"`` → (lo, hi) refined brackets, drawn as lines at lo
+        (dotted) and hi (solid) and named in the legend.
+    trials : (lam (T,), dissipation (T, S), classes (T, S)), optional
+        Runs at the bisection's trial λ values (drawn as small crosses).
     """
     fig = Figure(figsize=(7, 4.5))
     ax = fig.subplots()
@@ -121,6 +127,12 @@ def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4) -> Figu
         LL = np.broadcast_to(np.asarray(lam)[:, None], (L, S))[sel]
         ax.plot(LL, dissipation[sel], "o", ms=3, color=CLASS_COLORS[int(code)],
                 label=CLASS_NAMES[int(code)])
+    if trials is not None:
+        tl, td, tc = (np.asarray(a) for a in trials)
+        for code in np.unique(tc):
+            sel = tc == code
+            TL = np.broadcast_to(tl[:, None], tc.shape)[sel]
+            ax.plot(TL, td[sel], "x", ms=4, color=CLASS_COLORS[int(code)])
     ymax = np.nanmax(dissipation) if np.isfinite(np.nanmax(dissipation, initial=np.nan)) \
         else 1.0
     for x, name, ls in ((lam1, "λ1", "--"), (lam2, "λ2", "-")):
@@ -129,7 +141,15 @@ def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4) -> Figu
             ax.text(x, ymax, name, ha="right", va="top", fontsize=9)
     for (lo, hi), name, col in ((b3, "λ3", "#1e88e5"), (b4, "λ4", "#fdd835")):
         if hi is not None:
-            ax.axvspan(lo, hi, color=col, alpha=0.25, label=f"{name} bracket")
+            ax.axvspan(lo, hi, color=col, alpha=0.25, label=f"{name} grid bracket")
+    for key, name, col, y in (("lambda3", "λ3", "#0d47a1", 0.9),
+                              ("lambda4", "λ4", "#f57f17", 0.8)):
+        lo, hi = (refined or {}).get(key, (None, None))
+        if hi is not None and lo is not None:
+            ax.axvline(lo, color=col, ls=":", lw=1.2)
+            ax.axvline(hi, color=col, ls="-", lw=1.2,
+                       label=f"{name} ∈ [{lo:.5g}, {hi:.5g}]")
+            ax.text(hi, y * ymax, f" {name}", color=col, ha="left", va="top", fontsize=9)
     ax.set_xlabel("load factor λ")
     ax.set_ylabel("dissipation per cycle [J]")
     ax.legend(fontsize=7)
