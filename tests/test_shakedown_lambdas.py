@@ -306,3 +306,27 @@ def test_refine_brackets_bisects_a_known_step():
     assert refine_brackets(br0, evaluate, 1e-4, 2).runs == 0
     with pytest.raises(ValueError):
         refine_brackets(br, evaluate, 0.0, 2)
+
+
+def test_round_off_slip_does_not_erase_memory():
+    """Memory is erased only if every node really slips at one instant (seed §3.1): a node
+    held at its friction limit with a round-off slip rate does not count. At λ = 1.345 in
+    the triangle example node 1 stays stuck, so no run may report memory_erased, and
+    both engines agree."""
+    from slipcycle.discrete.case import read_discrete_case
+    from slipcycle.discrete.fastcycle import steady_states_batch
+    from slipcycle.discrete.shakedown import sample_initial_slips
+    from slipcycle.discrete.steady import simulate
+    from slipcycle.io import read_case
+
+    dc = read_discrete_case(read_case(Path(__file__).resolve().parents[1] / "examples"
+                                      / "shakedown_triangle.toml"))
+    load = dc.load.with_lam(1.345)
+    V = sample_initial_slips(dc.system, load, 8, seed=0)
+    fast = steady_states_batch(dc.system, load, V, cycles=60, steps_per_cycle=100)
+    stuck = fast["slip_length"].min(axis=1) < 1e-9 * np.abs(V).max()
+    assert stuck.any()
+    assert not np.any(fast["memory_erased"] & stuck)
+    for v0, erased in zip(V[:2], fast["memory_erased"][:2], strict=True):
+        ref = simulate(dc.system, load, initial_slip=v0, cycles=4, steps_per_cycle=100)
+        assert ref.all_slip_or_separated == erased

@@ -88,8 +88,6 @@ class Evolution:
         self.K = system.K
         self.f = np.asarray(system.friction)
         self.force_tol = rel_tol * force_scale
-        # slip rates below rate_tol × (load rate) count as zero [m/N]
-        self.rate_tol = 1e-9 / system.stiffness_scale()
         self.solver = RateSolver(system, self.force_tol)
         self.x = np.array(x0, float)
         self.r_w = np.array(r_w0, float)
@@ -153,9 +151,9 @@ class Evolution:
                 totals.slipped_negative |= (modes == SLIP_NEG) & (vd < 0)
                 sep = modes == SEPARATED
                 totals.separated |= sep
-                # a node in a slip mode whose rate is round-off (≪ load rate / stiffness)
-                # is not slipping: it must not count towards erasing the memory
-                moving = np.abs(vd) > self.rate_tol * float(np.max(np.abs(rw)))
+                # a node that grazes its friction limit slips a round-off amount: that
+                # must not count towards erasing the memory
+                moving = np.abs(vd) * dt > self.solver.disp_tol
                 if np.all((((modes == SLIP_POS) & (vd > 0)) | ((modes == SLIP_NEG) & (vd < 0)))
                           & moving | sep):
                     totals.all_slip_or_separated = True

@@ -111,9 +111,6 @@ def _kernel(A, B, f, theta, qw, pw, v0, cycles, tol, min_cycles, force_tol, disp
                 continue
             dq = (qw[kseg + 1] - qw[kseg]) / dth
             dp = (pw[kseg + 1] - pw[kseg]) / dth
-            # disp_scale / F = 1 / (largest stiffness); force_tol = 1e-10 F
-            rate_tol = 1e-9 * max(np.max(np.abs(dq)), np.max(np.abs(dp))) * disp_scale / (
-                1e10 * force_tol)
             t = 0.0
             count = 0
             while True:
@@ -182,8 +179,8 @@ def _kernel(A, B, f, theta, qw, pw, v0, cycles, tol, min_cycles, force_tol, disp
                     for j in range(n):
                         diss[j] -= (q[j] + 0.5 * dt * qd[j]) * vd[j] * dt
                         slip_len[j] += np.abs(vd[j]) * dt
-                        # round-off slip rates (≪ load rate / stiffness) are not slip
-                        if np.abs(vd[j]) <= rate_tol:
+                        # grazing a friction limit (round-off slip) is not slipping
+                        if np.abs(vd[j]) * dt <= 1e-10 * disp_scale:
                             allslip = False
                     if allslip:
                         erased = True
