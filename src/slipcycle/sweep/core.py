@@ -193,24 +193,26 @@ class SweepStore:
                 continue
             block = np.empty(box + cshape, dtype)
             for k, r in enumerate(results):
-                val = np.asarray(r[name])
-                if val.shape != cshape:
-                    raise ValueError(f"output {name!r} of cell {indices[k]}: shape "
-                                     f"{val.shape}, expected {cshape}")
-                block[tuple(p[k] for p in pos)] = val.astype(dtype)
+                block[tuple(p[k] for p in pos)] = _checked(name, indices[k], r[name], cshape,
+                                                           dtype)
             self.group[name][sel] = block
         self.group["done"][sel] = np.ones(box, bool)
 
     def _write_one(self, name, index, value, cshape, dtype):
-        val = np.asarray(value)
-        if val.shape != cshape:
-            raise ValueError(f"output {name!r} of cell {index}: shape {val.shape}, "
-                             f"expected {cshape}")
-        self.group[name][index] = val.astype(dtype)
+        self.group[name][index] = _checked(name, index, value, cshape, dtype)
 
     def read(self) -> dict:
         """All outputs as NumPy arrays (missing cells hold the fill value)."""
         return {name: np.asarray(self.group[name][...]) for name in self.schema}
+
+
+def _checked(name, index, value, cshape, dtype) -> np.ndarray:
+    """One cell's output ``name`` as ``dtype``, refused if its shape is not ``cshape``."""
+    val = np.asarray(value)
+    if val.shape != cshape:
+        raise ValueError(f"output {name!r} of cell {index}: shape {val.shape}, "
+                         f"expected {cshape}")
+    return val.astype(dtype)
 
 
 def _cells(shape):
