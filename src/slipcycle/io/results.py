@@ -43,12 +43,19 @@ class RunOutputs:
         figures are drawn only once the numbers exist.
     extra_files : dict of str to callable
         Relative path -> function ``f(path)`` writing an additional file (e.g. a report).
+    flags : dict of str to tuple of str
+        The model's own description of its categorical summary entries: summary key ->
+        every word that entry can take (e.g. ``"steady_state": ("shakedown",
+        "cyclic_slip", ...)``). Stores that keep such an entry as an integer (sweeps) use
+        the position in this tuple as the code, with CF ``flag_values``/``flag_meanings``.
+        Units of numeric entries are in ``summary["units"]`` (``"1"`` when dimensionless).
     """
 
     summary: dict
     dataset: xr.Dataset | None = None
     figures: dict[str, Callable[[], Any]] = field(default_factory=dict)
     extra_files: dict[str, Callable[[Path], None]] = field(default_factory=dict)
+    flags: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
 
 def provenance(case_text: str | None, case_path: Path | None = None) -> dict:
