@@ -19,6 +19,16 @@ COMMANDS = ["run", "demo", "map", "reduce", "limits", "shakedown", "basins", "sw
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
+EXIT_INTERNAL = 4
+
+#: optional dependencies -> the extra that installs them (``pip install 'slipcycle[X]'``)
+EXTRAS = {
+    "zarr": "sweep", "dask": "sweep", "distributed": "sweep",
+    "skfem": "fe", "meshio": "fe",
+}
+
+#: the argument of each command that names a file (not a directory) it writes
+_FILE_OUTPUTS = {"reduce": ("out", "case")}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,23 +44,76 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse unwritable output paths before any work (one line naming the path)."""
+    from slipcycle.io.results import check_output_dir, check_output_file
+
+    files = _FILE_OUTPUTS.get(args.command, ())
+    for name in ("out", "case"):
+        value = getattr(args, name, None)
+        if value is None or (name == "case" and name not in files):
+            continue
+        (check_output_file if name in files else check_output_dir)(value)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run the ``slipcycle`` command; returns the exit code.
+
+    0 success; 2 invalid input, unusable files or a missing optional dependency; 3 a solver
+    that cannot proceed on a valid model; 4 an internal error (a bug: please report it, with
+    ``SLIPCYCLE_DEBUG=1`` for the traceback); 130 interrupted.
+    """
+    import os
+
     from slipcycle.errors import SolverError
     from slipcycle.io import CaseError
 
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        _check_outputs(args)
         return int(args.execute(args) or 0)
     except CaseError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except SolverError as exc:
-        print(f"error: solver: {exc}", file=sys.stderr)
+        print(f"error: solver: {_one_line(exc)}", file=sys.stderr)
         return EXIT_SOLVER
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except ModuleNotFoundError as exc:
+        top = (exc.name or "").split(".")[0]
+        if top in EXTRAS:
+            extra = EXTRAS[top]
+            print(f"error: slipcycle {args.command}: needs the optional package {top!r}; "
+                  f"install it with: pip install 'slipcycle[{extra}]'", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        if os.environ.get("SLIPCYCLE_DEBUG"):
+            raise
+        print(f"error: internal: missing module {exc.name!r} (a broken installation: "
+              "reinstall slipcycle)", file=sys.stderr)
+        return EXIT_INTERNAL
+    except MemoryError:
+        print(f"error: slipcycle {args.command}: out of memory; reduce the problem size "
+              "(sliders, steps_per_cycle, grid or sweep axes)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:
+        # a file-system problem met during the run (disk full, a path removed meanwhile)
+        where = exc.filename or getattr(args, "out", None) or args.command
+        print(f"error: {where}: {_one_line(exc.strerror or exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as exc:  # noqa: BLE001 - a traceback is a defect; keep it one line
+        if os.environ.get("SLIPCYCLE_DEBUG"):
+            raise
+        print(f"error: internal: {type(exc).__name__}: {_one_line(exc)} (this is a bug in "
+              "slipcycle; rerun with SLIPCYCLE_DEBUG=1 for the traceback and report it)",
+              file=sys.stderr)
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":  # pragma: no cover

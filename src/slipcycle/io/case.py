@@ -20,7 +20,18 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Case", "CaseError", "Section", "read_case", "parse_case_text"]
+__all__ = ["Case", "CaseError", "Section", "read_case", "parse_case_text", "MODEL_COMMANDS"]
+
+#: which commands serve which ``model`` (used to say where a case belongs)
+MODEL_COMMANDS = {
+    "halfspace": ("run", "map", "sweep"),
+    "discrete": ("run", "shakedown", "basins", "sweep"),
+    "rods": ("run", "limits", "sweep"),
+    "fe": ("reduce",),
+}
+
+#: a case file larger than this is not a case file (read before parsing)
+MAX_CASE_BYTES = 64 * 1024 * 1024
 
 _MISSING = object()
 
@@ -78,6 +89,10 @@ class Section:
         if key in self.data:
             return self.data[key]
         if default is _MISSING:
+            # A missing required key next to an unread look-alike is a typo: name the typo.
+            typo = _typo_of(key, [k for k in self.data if k not in self._used])
+            if typo is not None:
+                raise self.error(typo, f"unknown key (did you mean {key!r}?)")
             raise self.error(key, "required key is missing")
         return default
 
@@ -251,6 +266,17 @@ def _check_bounds(section: Section, key: str, arr: np.ndarray, gt, ge, lt, le) -
             raise section.error(key, f"must be {sym} {bound:g}, got {worst:g}")
 
 
+def _typo_of(key: str, present) -> str | None:
+    """The key in ``present`` that looks like a misspelling of ``key``, if any."""
+    import difflib
+
+    close = difflib.get_close_matches(key, list(present), n=1, cutoff=0.75)
+    if close:
+        return close[0]
+    lowered = {k.lower(): k for k in present if isinstance(k, str)}
+    return lowered.get(key.lower())
+
+
 def _did_you_mean(word: str, candidates) -> str:
     import difflib
 
@@ -308,27 +334,58 @@ class Case:
 
 def parse_case_text(text: str, path: Path | None = None, models: Sequence[str] | None = None
                     ) -> Case:
-    """Parse TOML text into a :class:`Case` (checks only the ``model`` key)."""
+    """Parse TOML text into a :class:`Case` (checks only the ``model`` key).
+
+    ``models`` lists the models the calling command serves; a known model outside that list
+    is refused with the commands that do serve it.
+    """
+    where = str(path) if path is not None else "case"
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise CaseError("", f"case file is not valid TOML: {exc}") from None
+        raise CaseError(where, f"not a valid TOML case file: {exc}") from None
     model = data.get("model", _MISSING)
     if model is _MISSING:
         raise CaseError("model", "required key is missing (e.g. model = \"halfspace\")")
     if not isinstance(model, str):
         raise CaseError("model", f"must be a string, got {model!r}")
     if models is not None and model not in models:
+        if model in MODEL_COMMANDS:
+            serving = ", ".join(f"slipcycle {c}" for c in MODEL_COMMANDS[model])
+            raise CaseError("model", f"{model!r} cases are not served by this command "
+                            f"(it takes {', '.join(map(repr, models))}); use {serving}")
         raise CaseError("model", f"unknown model {model!r}; known: {', '.join(models)}"
                         + _did_you_mean(model, models))
     return Case(model=model, data=data, text=text, path=path)
 
 
+def read_text_file(path: str | Path, what: str = "case file") -> str:
+    """The UTF-8 text of ``path``; :class:`CaseError` naming the file for anything else.
+
+    Refuses directories, missing or unreadable files, binary files (NUL bytes), text that is
+    not UTF-8 and files too large to be a case file, each with one line.
+    """
+    path = Path(path)
+    try:
+        if path.is_dir():
+            raise CaseError(str(path), f"is a directory, not a {what}")
+        size = path.stat().st_size
+        if size > MAX_CASE_BYTES:
+            raise CaseError(str(path), f"is {size / 2**20:.0f} MiB: too large for a {what}")
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise CaseError(str(path), f"cannot read {what}: {exc.strerror or exc}") from None
+    if b"\x00" in raw:
+        raise CaseError(str(path), f"is a binary file, not a {what} (TOML text)")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise CaseError(str(path), f"is not UTF-8 text (byte 0x{raw[exc.start]:02x} at "
+                        f"offset {exc.start}); save the {what} as UTF-8") from None
+
+
 def read_case(path: str | Path, models: Sequence[str] | None = None) -> Case:
     """Read a TOML case file. Raises :class:`CaseError` for unreadable or invalid files."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise CaseError("", f"cannot read case file {path}: {exc.strerror}") from None
+    text = read_text_file(path)
     return parse_case_text(text, path.resolve(), models)

@@ -23,7 +23,8 @@ import xarray as xr
 
 from slipcycle import __version__
 
-__all__ = ["RunOutputs", "write_outputs", "provenance", "to_jsonable"]
+__all__ = ["RunOutputs", "write_outputs", "provenance", "to_jsonable", "check_output_dir",
+           "check_output_file", "remove_stale_partials"]
 
 RESULT_FILES = ("summary.json", "result.nc", "figures")
 
@@ -105,9 +106,15 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
     import matplotlib.pyplot as plt
 
     out_dir = Path(out_dir)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    check_output_dir(out_dir)
+    try:
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        remove_stale_partials(out_dir)
+        stage = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.partial-{os.getpid()}-",
+                                      dir=out_dir.parent))
+    except OSError as exc:
+        raise _output_error(out_dir, exc) from None
     meta = provenance(case_text, case_path)
-    stage = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.partial-", dir=out_dir.parent))
     try:
         summary = dict(outputs.summary)
         summary["metadata"] = {k: v for k, v in meta.items() if k != "case"}
@@ -129,9 +136,108 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
             target.parent.mkdir(parents=True, exist_ok=True)
             writer(target)
         _commit(stage, out_dir)
+    except OSError as exc:
+        raise _output_error(out_dir, exc) from None
     finally:
         shutil.rmtree(stage, ignore_errors=True)
     return out_dir
+
+
+def _output_error(path: Path, exc: OSError):
+    from slipcycle.io.case import CaseError
+
+    where = exc.filename if exc.filename else path
+    return CaseError(str(where), f"cannot write: {exc.strerror or exc}")
+
+
+def _first_existing(path: Path) -> Path:
+    path = Path(os.path.abspath(path))
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
+def _check_parent_writable(path: Path) -> None:
+    from slipcycle.io.case import CaseError
+
+    anchor = _first_existing(Path(path).parent if not Path(path).exists() else path)
+    if not anchor.is_dir():
+        raise CaseError(str(path), f"cannot be created: {anchor} is a file, not a directory")
+    if not os.access(anchor, os.W_OK | os.X_OK):
+        raise CaseError(str(path), f"cannot be created: no permission to write in {anchor}")
+
+
+def check_output_dir(path: str | Path) -> None:
+    """Refuse, before any work, an output directory that cannot be written.
+
+    Raises :class:`~slipcycle.io.CaseError` naming the path when it is an existing file, or
+    when neither it nor its nearest existing parent can be written.
+    """
+    from slipcycle.io.case import CaseError
+
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise CaseError(str(path), "exists and is not a directory; choose another --out")
+    if path.is_dir():
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise CaseError(str(path), "no permission to write in this directory")
+        return
+    _check_parent_writable(path)
+
+
+def check_output_file(path: str | Path) -> None:
+    """Refuse, before any work, an output file that cannot be written (see
+    :func:`check_output_dir`)."""
+    from slipcycle.io.case import CaseError
+
+    path = Path(path)
+    if path.is_dir():
+        raise CaseError(str(path), "is a directory; give a file name")
+    if path.exists():
+        if not os.access(path, os.W_OK) or not os.access(path.parent, os.W_OK | os.X_OK):
+            raise CaseError(str(path), "no permission to replace this file")
+        return
+    _check_parent_writable(path)
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale_partials(out_dir: str | Path) -> list[Path]:
+    """Remove staging folders left by a killed write of ``out_dir``.
+
+    Staging folders are named ``.<name>.partial-<pid>-*`` (and replaced results
+    ``.<entry>.old-<pid>``); those whose process no longer runs are deleted. Folders of a
+    live process (a concurrent write) are left alone.
+
+    Returns
+    -------
+    list of Path
+        What was removed.
+    """
+    out_dir = Path(out_dir)
+    candidates = []
+    if out_dir.parent.is_dir():
+        candidates += out_dir.parent.glob(f".{out_dir.name}.partial-*")
+    if out_dir.is_dir():
+        candidates += out_dir.glob(".*.old-*")
+    removed = []
+    for path in candidates:
+        tail = path.name.rsplit(".partial-", 1)[-1] if ".partial-" in path.name \
+            else path.name.rsplit(".old-", 1)[-1]
+        pid_text = tail.split("-", 1)[0]
+        if pid_text.isdigit() and _pid_alive(int(pid_text)):
+            continue
+        shutil.rmtree(path, ignore_errors=True)
+        removed.append(path)
+    return removed
 
 
 def _commit(stage: Path, out_dir: Path) -> None:
