@@ -31,8 +31,16 @@ EXTRAS = {
 _FILE_OUTPUTS = {"reduce": ("out", "case")}
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (``error: <option>: <problem>``), exit code 2."""
+
+    def error(self, message: str):  # noqa: D401 - argparse's hook
+        self.exit(EXIT_BAD_INPUT, f"error: {self.prog}: {_one_line(message)} "
+                  f"(see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="slipcycle",
         description="Frictional interfaces under periodic loading.",
     )

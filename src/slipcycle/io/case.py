@@ -79,6 +79,12 @@ class Section:
         return _join(self.prefix, key)
 
     def error(self, key: str, problem: str) -> CaseError:
+        """The error for ``key``; a problem with an absent key that has an unread
+        look-alike in the table is reported as that typo instead."""
+        if key not in self.data:
+            typo = _typo_of(key, [k for k in self.data if k not in self._used and k != key])
+            if typo is not None:
+                return CaseError(self.key(typo), f"unknown key (did you mean {key!r}?)")
         return CaseError(self.key(key), problem)
 
     def has(self, key: str) -> bool:
@@ -89,10 +95,7 @@ class Section:
         if key in self.data:
             return self.data[key]
         if default is _MISSING:
-            # A missing required key next to an unread look-alike is a typo: name the typo.
-            typo = _typo_of(key, [k for k in self.data if k not in self._used])
-            if typo is not None:
-                raise self.error(typo, f"unknown key (did you mean {key!r}?)")
+            # error() names an unread look-alike as the typo it is
             raise self.error(key, "required key is missing")
         return default
 
@@ -314,6 +317,11 @@ class Case:
         """The validating reader of a top-level table (the same object on each call)."""
         if name not in self._sections:
             if name not in self.data:
+                typo = _typo_of(name, [k for k in self.data
+                                       if k not in self._sections and k != "model"])
+                if typo is not None:
+                    raise CaseError(typo, f"unknown top-level key or table (did you mean "
+                                    f"[{name}]?)")
                 if required:
                     raise CaseError(name, f"required table [{name}] is missing")
                 self._sections[name] = Section({}, name, self.base_dir)
