@@ -27,6 +27,9 @@ EXTRAS = {
     "skfem": "fe", "meshio": "fe",
 }
 
+#: optional packages a command needs before it creates anything (its results store)
+_REQUIRES = {"sweep": ("zarr",), "shakedown": ("zarr",), "basins": ("zarr",)}
+
 #: the argument of each command that names a file (not a directory) it writes
 _FILE_OUTPUTS = {"reduce": ("out", "case")}
 
@@ -64,6 +67,18 @@ def _check_outputs(args: argparse.Namespace) -> None:
         (check_output_file if name in files else check_output_dir)(value)
 
 
+def _check_extras(args: argparse.Namespace) -> None:
+    """Name the missing extra before a command creates anything."""
+    import importlib.util
+
+    needed = list(_REQUIRES.get(args.command, ()))
+    if getattr(args, "scheduler", None):
+        needed.append("distributed")
+    for name in needed:
+        if importlib.util.find_spec(name) is None:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+
+
 def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
@@ -83,6 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        _check_extras(args)
         _check_outputs(args)
         return int(args.execute(args) or 0)
     except CaseError as exc:
