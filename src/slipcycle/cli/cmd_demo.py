@@ -1,7 +1,9 @@
 """``slipcycle demo --out DIR``: run the embedded example cases and write a report.
 
 The report (``DIR/report.md``) lists each case, its key numbers and its figures; every
-case's own results (summary.json, result.nc, figures/) sit in ``DIR/<case>/``.
+case's own results (summary.json, result.nc, figures/) sit in ``DIR/<case>/``. The whole
+report is written in a staging folder beside ``DIR`` and moved into place at the end, so an
+interrupted demo leaves no partial report.
 """
 
 from __future__ import annotations
@@ -110,62 +112,99 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
+    import os
+    import shutil
+    import tempfile
+
+    from slipcycle.io.results import check_output_dir, remove_stale_partials
+
+    out = Path(args.out)
+    check_output_dir(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_partials(out)
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-{os.getpid()}-",
+                                  dir=out.parent))
+    try:
+        report = write_report(stage)
+        if out.exists():
+            old = out.with_name(f".{out.name}.partial-{os.getpid()}-old")
+            out.rename(old)
+            stage.rename(out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            stage.rename(out)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    print(f"report written to {out / report.name}")
+    return 0
+
+
+def write_report(out: Path) -> Path:
+    """Run every demo case into ``out`` and write ``out/report.md``; returns its path."""
     from slipcycle import __version__
     from slipcycle.cli.models import run_model
     from slipcycle.halfspace.wmap import w_hat_map
     from slipcycle.io import parse_case_text, write_outputs
     from slipcycle.io.results import to_jsonable
 
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     cases = DEMO_CASES
     lines = [f"# slipcycle demo report (version {__version__})", ""]
-    for name, (title, text) in cases.items():
+    for i, (name, (title, text)) in enumerate(cases.items(), 1):
         t0 = time.perf_counter()
         case = parse_case_text(text.strip() + "\n")
         outputs = run_model(case)
         write_outputs(out / name, outputs, case.text, None)
         dt = time.perf_counter() - t0
         s = to_jsonable(outputs.summary)
-        print(f"{name}: dissipation_per_cycle = {s.get('dissipation_per_cycle')} ({dt:.1f} s)")
+        unit = s.get("units", {}).get("dissipation_per_cycle", "")
+        print(f"[{i}/{len(cases) + 1}] {name}: dissipation_per_cycle = "
+              f"{s.get('dissipation_per_cycle')} {unit} ({dt:.1f} s)", flush=True)
         keys = [k for k in ("steady_state", "dissipation_per_cycle", "cycles_run",
                             "permanent_stick_size", "W_hat", "slipping_nodes", "f_crit",
                             "omega1", "torque_ratio", "dissipation_per_cycle_qs")
                 if k in s]
+        units = s.get("units", {})
         lines += [f"## {title}", "", f"Case `{name}` ({dt:.2f} s):", "", "```toml",
-                  case.text.strip(), "```", "", "| quantity | value |", "|---|---|"]
-        lines += [f"| `{k}` | {json.dumps(s[k])} |" for k in keys]
+                  case.text.strip(), "```", "", "| quantity | value | unit |", "|---|---|---|"]
+        lines += [f"| `{k}` | {json.dumps(s[k])} | {units.get(k, '')} |" for k in keys]
         lines.append("")
         for fig in sorted((out / name / "figures").glob("*.png")):
             lines.append(f"![{fig.stem}]({name}/figures/{fig.name})")
         lines.append("")
 
-    # A small Ŵ map: Fig. 7 of seed 001 and the cubic law
+    # A small Ŵ map against the phase, and the cubic law at small amplitude
     import numpy as np
     import xarray as xr
 
     from slipcycle.io import RunOutputs
     from slipcycle.plot.halfspace import w_hat_cubic_law, w_hat_vs_phase
 
+    t0 = time.perf_counter()
     phase = np.linspace(-np.pi, np.pi, 37)
     Q1 = np.array([0.2, 0.4, 0.6, 0.8])
     W = w_hat_map([0.4], Q1, phase)
     q = np.geomspace(0.01, 0.5, 10)
     Wq = w_hat_map([0.0], q, [0.0])[0, :, 0]
-    ds = xr.Dataset({"W_hat": (("P1_hat", "Q1_hat", "phase"), W)},
-                    coords={"P1_hat": [0.4], "Q1_hat": Q1, "phase": phase})
+    ds = xr.Dataset(
+        {"W_hat": (("P1_hat", "Q1_hat", "phase"), W,
+                   {"units": "1", "long_name": "W / (lam gamma_sigma f^2 P0)"})},
+        coords={"P1_hat": ("P1_hat", [0.4], {"units": "1", "long_name": "P1 / P0"}),
+                "Q1_hat": ("Q1_hat", Q1, {"units": "1", "long_name": "Q1 / (f P0)"}),
+                "phase": ("phase", phase, {"units": "rad",
+                                           "long_name": "lag of Q behind P"})})
     write_outputs(out / "rough_w_map", RunOutputs(
-        summary={"model": "halfspace", "analysis": "w_hat_map", "dissipation_per_cycle": None},
+        summary={"model": "halfspace", "analysis": "w_hat_map",
+                 "units": {"W_hat": "1", "P1_hat": "1", "Q1_hat": "1", "phase": "rad"}},
         dataset=ds, figures={"w_hat_vs_phase": lambda: w_hat_vs_phase(ds, 0.4),
                              "w_hat_cubic_law": lambda: w_hat_cubic_law(q, Wq, "P̂1 = 0")}))
-    lines += ["## Rough-surface dissipation map (seed 001 Fig. 7)", "",
+    print(f"[{len(cases) + 1}/{len(cases) + 1}] rough_w_map "
+          f"({time.perf_counter() - t0:.1f} s)", flush=True)
+    lines += ["## Rough-surface dissipation map Ŵ(φ) (Barber, Frictional systems under "
+              "periodic loads, Fig. 7)", "",
               "Ŵ = W/(λ γσ f² P0) against the phase φ at P̂1 = 0.4; gaps are load paths that "
               "reach gross slip. Second figure: Ŵ against Q̂1 with the law (2/3)Q̂1³.", "",
               "![w_hat_vs_phase](rough_w_map/figures/w_hat_vs_phase.png)",
               "![w_hat_cubic_law](rough_w_map/figures/w_hat_cubic_law.png)", ""]
     report = out / "report.md"
-    tmp = report.with_suffix(".md.partial")
-    tmp.write_text("\n".join(lines), encoding="utf-8")
-    tmp.replace(report)
-    print(f"report written to {report}")
-    return 0
+    report.write_text("\n".join(lines), encoding="utf-8")
+    return report
