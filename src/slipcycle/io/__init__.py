@@ -1,4 +1,4 @@
-"""Case files (input) and result files (output), SPEC §6."""
+"""Case files (input) and result files (output)."""
 
 from slipcycle.io.case import Case, CaseError, Section, parse_case_text, read_case
 from slipcycle.io.results import RunOutputs, write_outputs

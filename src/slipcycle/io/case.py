@@ -1,4 +1,4 @@
-"""Reading and validating TOML case files (SPEC §6).
+"""Reading and validating TOML case files.
 
 A case file names its model at the top level (``model = "halfspace"``); the table of that
 name holds the model, ``[loading]`` the loads and ``[run]`` the numerical settings.

@@ -1,4 +1,4 @@
-"""Writing results: ``summary.json``, ``result.nc`` and ``figures/*.png`` (SPEC §6).
+"""Writing results: ``summary.json``, ``result.nc`` and ``figures/*.png``.
 
 Outputs are staged in a temporary directory beside the target and moved into place only
 when every file has been written, so a run that fails leaves nothing that looks like a

@@ -1,4 +1,4 @@
-"""Periodic loads and assembly protocols (SPEC §1)."""
+"""Periodic loads and assembly protocols."""
 
 from slipcycle.loading.periodic import (
     HarmonicLoad,
