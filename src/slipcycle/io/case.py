@@ -132,6 +132,9 @@ class Section:
             le: int | None = None) -> int:
         """An integer, optionally bounded."""
         raw = self._get(key, default)
+        # 1e7 is how people write ten million; accept integral floats, refuse 2.5
+        if isinstance(raw, float) and math.isfinite(raw) and raw.is_integer():
+            raw = int(raw)
         if isinstance(raw, bool) or not isinstance(raw, int):
             raise self.error(key, f"must be an integer, got {raw!r}")
         _check_bounds(self, key, np.array([raw]), None, ge, None, le)
