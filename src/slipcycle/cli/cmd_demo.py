@@ -63,7 +63,7 @@ phase = 1.0
 cycles = 4
 steps_per_cycle = 400
 """),
-    "discrete_two_node": ("Coupled two-node system (SPEC §6 example)", """
+    "discrete_two_node": ("Coupled two-node system under out-of-phase loads", """
 model = "discrete"
 [discrete]
 A = [[1.0, -0.3], [-0.3, 0.8]]
