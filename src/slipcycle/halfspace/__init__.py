@@ -1,4 +1,4 @@
-"""Uncoupled half-space contacts: Cattaneo–Mindlin / Ciavarella–Jäger microslip (SPEC §4).
+"""Uncoupled half-space contacts: Cattaneo–Mindlin / Ciavarella–Jäger microslip.
 
 Data flow: a :class:`~slipcycle.halfspace.profiles.Profile` (the normal law P(U)) becomes a
 :class:`~slipcycle.halfspace.bed.SliderBed` (independent Coulomb sliders indexed by the
@@ -11,6 +11,7 @@ the dimensionless rough-surface dissipation Ŵ(P̂1, Q̂1, φ).
 from slipcycle.halfspace.bed import SliderBed, make_bed
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.history import HistoryResult, run_history
+from slipcycle.halfspace.loads import contact_loads
 from slipcycle.halfspace.profiles import (
     Cylinder2D,
     FlatPunch,
@@ -23,5 +24,6 @@ from slipcycle.halfspace.profiles import (
 
 __all__ = [
     "ContactElasticity", "Cylinder2D", "FlatPunch", "HistoryResult", "PowerLaw", "Profile",
-    "RoughExponential", "SliderBed", "Tabulated", "make_bed", "run_history", "sphere",
+    "RoughExponential", "SliderBed", "Tabulated", "contact_loads", "make_bed", "run_history",
+    "sphere",
 ]

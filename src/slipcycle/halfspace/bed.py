@@ -1,4 +1,4 @@
-"""The slider bed equivalent to an uncoupled half-space contact (SPEC §4).
+"""The slider bed equivalent to an uncoupled half-space contact.
 
 By the Ciavarella–Jäger theorem a contact of similar half-spaces behaves, in its global
 force–displacement response, like a bed of independent sliders indexed by the approach
@@ -12,6 +12,17 @@ slider of stiffness S_{j+1} − S_j placed at the stiffness-weighted centroid of
 levels, so the discrete P(U) equals the exact law at every cell edge. Everything below
 P_lo is lumped into one slider chosen to reproduce P and S at P_lo; it lies deeper than
 every slider that slips while the loads stay above P_lo.
+
+Which loads a history reaches. A slider can slip only where the stick load P_S of some
+step lies below its level. For constant P and Q between ±Q*, P_S ≥ P − Q*/f (Mindlin &
+Deresiewicz 1953); :func:`lumping_load` takes the conservative P_min − (Q_max − Q_min)/f
+over the history (the range of Q includes the unloaded Q = 0), and callers check after the
+run that slip never reached the lumped slider or the cell above it
+(:func:`lumped_slider_slipped`), rerunning on an unlumped bed otherwise, so the result never
+rests on the bound alone. The rough law
+dP/dU = P/(γσ) has no first touch, so its bed always lumps below some P_lo > 0; its
+construction (:func:`rough_unit_bed`) is compiled so that the Ŵ-map kernel and
+:func:`make_bed` share it.
 """
 
 from __future__ import annotations
@@ -19,8 +30,80 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-__all__ = ["SliderBed", "make_bed"]
+__all__ = ["SliderBed", "lumped_slider_slipped", "lumping_load", "make_bed",
+           "rough_unit_bed", "UNLUMPED_FRACTION"]
+
+#: where no bound applies, loads below this fraction of P_max are lumped (rough law only:
+#: it needs some P_lo > 0); the lumped slider is exact in P(U) above it
+UNLUMPED_FRACTION = 1e-9
+
+
+@njit(cache=True)
+def lumping_load(P_min, P_max, Q_min, Q_max, friction):
+    """Load below which no slider slips over a history, or 0 if there is no such bound.
+
+    Parameters
+    ----------
+    P_min, P_max : float
+        Extreme normal loads of the history after the unloaded start (N or N/m).
+    Q_min, Q_max : float
+        Extreme tangential loads of the history (the unloaded Q = 0 is included).
+    friction : float
+
+    Returns
+    -------
+    float
+        P_min − (Q_max − Q_min)/f when positive (with a margin of 1 % of the slip range,
+        so the lumped cell never touches a stick front), else 0.
+    """
+    dq = (max(Q_max, 0.0) - min(Q_min, 0.0)) / friction
+    bound = P_min - dq
+    bound -= 0.01 * (P_max - bound)
+    return bound if bound > 0.0 else 0.0
+
+
+def lumped_slider_slipped(first_slip: np.ndarray) -> bool:
+    """Whether slip reached the lumped slider (index 0) or the cell just above it.
+
+    Slider 1 slipping means the stick front came within one cell of the lumped loads, so
+    the history must be rerun on a bed that lumps less.
+    """
+    return bool(np.asarray(first_slip).size and np.min(first_slip) <= 1)
+
+
+@njit(cache=True)
+def rough_unit_bed(P_lo, P_max, n):
+    """Slider bed of the rough law P = exp(U) (γσ = 1, reference load 1).
+
+    Exact at n+1 equally spaced loads in [P_lo, P_max] (equal increments of S = dP/dU = P),
+    one slider per cell at the stiffness-weighted centroid of its levels, plus one slider
+    lumping everything below P_lo (reproducing P and S there).
+
+    Returns
+    -------
+    level, kn : (n+1,) arrays
+        Levels (units of γσ) and normal stiffnesses (units of 1/γσ).
+    edge_load : (n+2,) array
+        Loads at the cell edges, 0 first (the lumped slider's cell).
+    """
+    level = np.empty(n + 1)
+    kn = np.empty(n + 1)
+    edges = np.empty(n + 2)
+    level[0] = np.log(P_lo) - 1.0          # reproduces P and dP/dU at P_lo
+    kn[0] = P_lo
+    edges[0] = 0.0
+    edges[1] = P_lo
+    dP = (P_max - P_lo) / n
+    for j in range(n):
+        Pa = P_lo + j * dP
+        Pb = P_lo + (j + 1) * dP
+        kn[j + 1] = dP                      # ΔS with S = dP/dU = P
+        level[j + 1] = (np.log(Pb) * Pb - np.log(Pa) * Pa - dP) / dP
+        edges[j + 2] = Pb
+    edges[n + 1] = P_max
+    return level, kn, edges
 
 
 @dataclass(frozen=True)
@@ -108,8 +191,19 @@ def make_bed(profile, *, friction: float, compliance_ratio: float, P_max: float,
     n_sliders : int
         Number of distributed sliders (profiles with an exact finite slider set ignore it).
     P_lo : float, optional
-        Loads below this are lumped into one slider. Defaults to 1e-6·P_max.
+        Loads below this are lumped into one slider. Defaults to 1e-6·P_max (to
+        ``UNLUMPED_FRACTION``·P_max for the rough law); a history's own value comes from
+        :func:`lumping_load`.
     """
+    from slipcycle.halfspace.profiles import RoughExponential
+
+    if isinstance(profile, RoughExponential):
+        lo = P_lo if P_lo is not None and P_lo > 0 else UNLUMPED_FRACTION * P_max
+        level, k, edges = rough_unit_bed(lo / profile.reference_load,
+                                         P_max / profile.reference_load, int(n_sliders))
+        g = profile.gamma_sigma
+        return SliderBed(g * level, k * profile.reference_load / g, compliance_ratio,
+                         friction, edges * profile.reference_load, None)
     conc = profile.concentrated()
     if conc is not None:
         level, k = (np.asarray(a, float) for a in conc)

@@ -1,4 +1,4 @@
-"""Case file → :class:`HalfspaceModel` → results (``model = "halfspace"``, SPEC §4, §6).
+"""Case file → :class:`HalfspaceModel` → results (``model = "halfspace"``, §6).
 
 Keys of ``[halfspace]``:
   profile            sphere | cylinder | flat_punch | power_law | rough_exponential | tabulated
@@ -11,7 +11,9 @@ Keys of ``[halfspace]``:
   contact_modulus    E* (Pa) directly
   compliance_ratio   λ_c (default 1 in 2-D, (2 − ν)/(2(1 − ν)) in 3-D)
   friction           f
-Keys of ``[loading]``: P0, P1, Q0, Q1, phase (P = P0 + λP1 cos θ, Q = Q0 + λQ1 cos(θ − phase));
+Keys of ``[loading]``: P0, P1, P1_phase, Q0, Q1, phase with
+  P = P0 + λP1 cos(θ − P1_phase), Q = Q0 + λQ1 cos(θ − phase) (lags; the convention is in
+  :mod:`slipcycle.loading.periodic`, the Python twin :func:`~slipcycle.halfspace.contact_loads`);
   P1/Q1 may be lists over harmonics h = 1, 2, … with P1_phase/phase lists; U0, U1
   (approach control) instead of P0, P1; V0, V1 (displacement control) instead of Q0, Q1;
   lam (λ, default 1); or a table: theta, P (or U), Q (or V); ``[[loading.protocol]]``
@@ -24,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from slipcycle.halfspace.elastic import ContactElasticity
+from slipcycle.halfspace.loads import contact_loads
 from slipcycle.halfspace.model import HalfspaceModel, solve
 from slipcycle.halfspace.profiles import (
     Cylinder2D,
@@ -34,7 +37,7 @@ from slipcycle.halfspace.profiles import (
     sphere,
 )
 from slipcycle.io import Case, CaseError, RunOutputs, Section
-from slipcycle.loading import HarmonicLoad, TabulatedLoad
+from slipcycle.loading import TabulatedLoad
 
 __all__ = ["parse_case", "run_case"]
 
@@ -63,8 +66,12 @@ def _profile(sec: Section):
         ratio = sec.float("compliance_ratio", None, gt=0.0)
         if name == "rough_exponential":
             prof = RoughExponential(sec.float("gamma_sigma", gt=0.0))
+            for key in ("E", "nu"):
+                if ratio is not None and sec.has(key):
+                    raise sec.error(key, "not used by a rough_exponential profile when "
+                                    "compliance_ratio is given (E and nu only set λ_c)")
             if ratio is None:
-                # λ_c from ν when given (3-D, eq. 9 of seed 001), else required
+                # λ_c from ν when given (3-D, Barber 2012, eq. 9), else required
                 nu = sec.array("nu", None, shape=(2,), gt=-1.0, le=0.5)
                 if nu is None:
                     raise sec.error("compliance_ratio", "required for rough_exponential "
@@ -104,17 +111,17 @@ def _profile(sec: Section):
     return prof, el, el.compliance_ratio
 
 
-def _component(sec: Section, mean_key: str, amp_key: str, phase_key: str, lam: float,
-               phase_sign: float) -> HarmonicLoad:
+def _harmonic_keys(sec: Section, mean_key: str, amp_key: str, phase_key: str
+                   ) -> tuple[float, np.ndarray, np.ndarray]:
+    """(mean, amplitudes (H,), lags (H,)) of one load component, validated."""
     mean = sec.float(mean_key, 0.0)
     amp = np.atleast_1d(sec.array(amp_key, 0.0))
     if amp.ndim != 1:
         raise sec.error(amp_key, "must be a number or a list over harmonics")
     ph = np.atleast_1d(sec.array(phase_key, 0.0))
-    if ph.size not in (1, amp.size):
+    if ph.ndim != 1 or ph.size not in (1, amp.size):
         raise sec.error(phase_key, f"needs 1 or {amp.size} values (one per harmonic)")
-    ph = np.broadcast_to(ph, amp.shape)
-    return HarmonicLoad(np.array([mean]), amp[:, None], phase_sign * ph[:, None], lam)
+    return mean, amp, ph
 
 
 def _pick(sec: Section, force_keys: tuple[str, ...], disp_keys: tuple[str, ...],
@@ -146,9 +153,10 @@ def _loading(sec: Section):
         if not sec.has(f"{nk}0"):
             raise sec.error(f"{nk}0", "required key is missing (mean normal "
                             + ("load" if normal_force else "approach") + ")")
-        normal = _component(sec, f"{nk}0", f"{nk}1", f"{nk}1_phase", lam, +1.0)
-        # Q = Q0 + Q1 cos(θ − φ): the phase lag enters with a minus sign
-        tangential = _component(sec, f"{tk}0", f"{tk}1", "phase", lam, -1.0)
+        # the meaning of every key is that of contact_loads (lags; loading/periodic.py)
+        P0, P1, P1_phase = _harmonic_keys(sec, f"{nk}0", f"{nk}1", f"{nk}1_phase")
+        Q0, Q1, phase = _harmonic_keys(sec, f"{tk}0", f"{tk}1", "phase")
+        normal, tangential = contact_loads(P0, P1, Q0, Q1, phase, P1_phase, lam)
     protocol = []
     for st in sec.tables("protocol", None):
         protocol.append([st.float(nk), st.float(tk, 0.0)])
@@ -157,44 +165,129 @@ def _loading(sec: Section):
             "force" if tang_force else "displacement", np.array(protocol).reshape(-1, 2))
 
 
+#: keys of [halfspace] that only some profiles read
+PROFILE_KEYS = {
+    "sphere": {"radius", "E", "nu", "contact_modulus", "compliance_ratio"},
+    "cylinder": {"radius", "E", "nu", "contact_modulus", "compliance_ratio", "reference_depth"},
+    "flat_punch": {"radius", "E", "nu", "contact_modulus", "compliance_ratio"},
+    "power_law": {"coefficient", "exponent", "E", "nu", "contact_modulus", "compliance_ratio"},
+    "rough_exponential": {"gamma_sigma", "compliance_ratio", "nu", "E"},
+    "tabulated": {"table_U", "table_P", "compliance_ratio"},
+}
+
+#: memory a run may plan to use; larger requests are refused before any work
+MEMORY_LIMIT_BYTES = 4e9
+
+_DEFAULT_SLIDERS = 2000
+_DEFAULT_STEPS = 400
+
+
+def _count(sec: Section, key: str, default: int, lo: int, hi: float | None = None) -> int:
+    """A whole number; 1e7 written as a float is accepted (it is a count, not a value)."""
+    raw = sec.data.get(key, default)
+    if isinstance(raw, float) and raw.is_integer():
+        sec.data[key] = raw = int(raw)
+    return sec.int(key, default, ge=lo, le=hi)
+
+
 def parse_case(case: Case) -> HalfspaceModel:
     """Validate a ``halfspace`` case completely (raises CaseError) and build the model."""
+    if "halfspace" not in case.data and "map" in case.data:
+        raise CaseError("map", "this is a Ŵ map case: run it with `slipcycle map` (`slipcycle "
+                        "run` needs a [halfspace] table)")
     sec = case.section("halfspace")
     profile, elasticity, ratio = _profile(sec)
+    name = sec.data["profile"]
+    for key in sorted(set(sec.data) - PROFILE_KEYS[name] - {"profile", "friction"}):
+        users = sorted(p for p, keys in PROFILE_KEYS.items() if key in keys)
+        if users:
+            raise sec.error(key, f"not used by profile = {name!r} (only by "
+                            f"{', '.join(users)})")
     friction = sec.float("friction", gt=0.0)
     normal, tangential, ncontrol, tcontrol, protocol = _loading(case.section("loading"))
     run = case.section("run", required=False)
-    steps = run.int("steps_per_cycle", 400, ge=8)
+    steps = _count(run, "steps_per_cycle", _DEFAULT_STEPS, 8)
     model = HalfspaceModel(
         profile=profile, elasticity=elasticity, friction=friction, compliance_ratio=ratio,
         normal=normal, tangential=tangential, normal_control=ncontrol,
         tangential_control=tcontrol, protocol=protocol, steps_per_cycle=steps,
-        max_cycles=run.int("cycles", 5, ge=1, le=10000),
-        n_sliders=run.int("sliders", 2000, ge=10, le=10_000_000),
-        assembly_steps=run.int("assembly_steps", max(steps // 4, 10), ge=1),
+        max_cycles=_count(run, "cycles", 5, 1, 10000),
+        n_sliders=_count(run, "sliders", _DEFAULT_SLIDERS, 10),
+        assembly_steps=_count(run, "assembly_steps", max(steps // 4, 10), 1),
         snapshots=np.atleast_1d(run.array("snapshots", [0.0, np.pi / 2, np.pi, 1.5 * np.pi],
                                           ge=0.0, le=2 * np.pi)),
         steady_tol=run.float("steady_tol", 1e-9, gt=0.0, lt=1.0),
-        profile_name=sec.data["profile"],
+        profile_name=name,
     )
+    if "map" in case.data:   # a run case may carry its Ŵ map (slipcycle map reads it)
+        case.section("map").ignore()
     case.finish()
+    check_memory(model)
     _check_physics(case, model)
     return model
 
 
+def memory_estimate(model: HalfspaceModel) -> float:
+    """Bytes a run of ``model`` needs at its peak (order of magnitude).
+
+    Per slider: the last cycle's forces and slips, recorded and stacked (32 B per step),
+    the bed table (~1 kB) and, for axisymmetric profiles, the Abel operators on 200 radii
+    (~16 kB). Per step of the history: ~100 B (U, V, P, Q, θ, cycle, stick load and their
+    Dataset copies).
+    """
+    n, S = model.n_sliders + 1, model.steps_per_cycle
+    per_slider = 32.0 * (S + 1) + 1e3 + (16e3 if model.profile.axisymmetric else 0.0)
+    n_steps = model.assembly_steps * (model.protocol.shape[0] + 2) + model.max_cycles * S
+    return n * per_slider + 100.0 * n_steps
+
+
+def _gb(b: float) -> str:
+    """Bytes in words: '80 GB', '64 TB'."""
+    for unit, size in (("EB", 1e18), ("PB", 1e15), ("TB", 1e12), ("GB", 1e9)):
+        if b >= 0.1 * size:
+            return f"{b / size:.3g} {unit}"
+    return f"{b / 1e6:.3g} MB"
+
+
+def check_memory(model: HalfspaceModel, limit: float = MEMORY_LIMIT_BYTES) -> None:
+    """Refuse (CaseError naming the key that asks most) runs that would not fit in memory."""
+    need = memory_estimate(model)
+    if need <= limit:
+        return
+    ratios = {
+        "run.sliders": (model.n_sliders / _DEFAULT_SLIDERS, f"{model.n_sliders} sliders"),
+        "run.steps_per_cycle": (model.steps_per_cycle / _DEFAULT_STEPS,
+                                f"{model.steps_per_cycle} steps per cycle"),
+        "run.assembly_steps": (model.assembly_steps / 100, f"{model.assembly_steps} "
+                               "assembly steps"),
+        "run.cycles": (model.max_cycles / 5, f"{model.max_cycles} cycles"),
+    }
+    key = max(ratios, key=lambda k: ratios[k][0])
+    raise CaseError(key, f"{ratios[key][1]} need about {_gb(need)} of memory "
+                    f"(limit {_gb(limit)}); reduce {key.split('.')[1]}")
+
+
 def _check_physics(case: Case, model: HalfspaceModel) -> None:
     """Refuse loads the contact cannot carry (before any computation)."""
-    lo, hi = model.normal_load_range()
     nk = "P" if model.normal_control == "force" else "U"
+    harmonic = not isinstance(model.normal, TabulatedLoad)
+    _, cycle_n, _ = model.cycle_samples()
+    states = [(f"loading.{nk}1" if harmonic else f"loading.{nk}", float(cycle_n.min()))]
+    states += [(f"loading.protocol[{i}].{nk}", float(v))
+               for i, v in enumerate(model.protocol[:, 0])]
+    lo, hi = model.normal_load_range()
     if model.normal_control == "force":
         if hi <= 0:
-            raise CaseError(f"loading.{nk}0", "the normal load never compresses the contact")
-        if isinstance(model.profile, RoughExponential) and lo <= 0:
-            raise CaseError(f"loading.{nk}1", f"a rough contact needs P > 0 throughout the "
-                            f"cycle (minimum {lo:g} N)")
-        if lo < 0:
-            raise CaseError(f"loading.{nk}1", f"normal load becomes tensile (minimum {lo:g} N); "
-                            "adhesion is not modelled")
+            raise CaseError(f"loading.{nk}0" if harmonic else f"loading.{nk}",
+                            "the normal load never compresses the contact")
+        rough = isinstance(model.profile, RoughExponential)
+        for key, v in states:
+            if rough and v <= 0:
+                raise CaseError(key, f"a rough contact needs P > 0 throughout the load path "
+                                f"(minimum {v:g} N)")
+            if v < 0:
+                raise CaseError(key, f"normal load becomes tensile (minimum {v:g} N); "
+                                "adhesion is not modelled")
         if isinstance(model.profile, Cylinder2D) and hi >= model.profile.max_load():
             raise CaseError("halfspace.reference_depth", "too shallow for the largest load: "
                             "the plane approach needs a < 2d/e")

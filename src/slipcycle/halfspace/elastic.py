@@ -27,7 +27,7 @@ class ContactElasticity:
         E* = [(1 − ν1²)/E1 + (1 − ν2²)/E2]⁻¹ in Pa.
     compliance_ratio : float
         λ_c = (dV/dQ)/(dU/dP), the ratio of tangential to normal incremental compliance:
-        1 for plane problems of similar materials; (2 − ν)/(2(1 − ν)) in 3-D (seed 001
+        1 for plane problems of similar materials; (2 − ν)/(2(1 − ν)) in 3-D (Barber 2012,
         eq. 9), i.e. E*/(4G*) with G* = [(2 − ν1)/G1 + (2 − ν2)/G2]⁻¹ (Mindlin 1949).
     dundurs_beta : float
         Dundurs' β (0 when the superposition of Ciavarella and Jäger is exact).

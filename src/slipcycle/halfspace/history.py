@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from slipcycle.halfspace.bed import SliderBed
-from slipcycle.halfspace.kernels import STATUS_OK, drive
+from slipcycle.halfspace.kernels import STATUS_OK, drive_from
 
 __all__ = ["HistoryResult", "run_history", "GrossSlip"]
 
@@ -39,6 +39,8 @@ class HistoryResult:
         Index of the lowest slipping slider in each step (bed.size: full stick).
     slider_dissipation : (C, n) array
         Dissipation of each slider in each cycle run (J).
+    slider_slip : (C, n) array
+        Σ|Δz| of each slider in each cycle run (m): its total slip over the cycle.
     global_dissipation : (C,) array
         ∮ Q dV per cycle (trapezoidal), J.
     steady : bool
@@ -61,6 +63,7 @@ class HistoryResult:
     first_slip: np.ndarray
     slider_dissipation: np.ndarray
     global_dissipation: np.ndarray
+    slider_slip: np.ndarray
     steady: bool
     state_change: float
     last_t: np.ndarray | None
@@ -102,6 +105,7 @@ def run_history(
     min_cycles: int = 2,
     steady_tol: float = 1e-9,
     record_last_cycle: bool = True,
+    unloaded_approach: float | None = None,
 ) -> HistoryResult:
     """Run the assembly path, then periodic cycles until the state repeats.
 
@@ -122,6 +126,10 @@ def run_history(
         Steady when max|t_end − t_start| ≤ steady_tol · max_i f n_i.
     record_last_cycle : bool
         Keep slider forces and slips over the last cycle (memory n·(S+1)).
+    unloaded_approach : float, optional
+        Approach of the unloaded state the assembly starts from (m); defaults to the first
+        touch of the bed, ``bed.approach(0)``. Sliders touching during a step take their
+        share of that step's tangential increment from the moment they touch.
     """
     force_control = tangential_control == "force"
     if normal_control == "force":
@@ -133,7 +141,9 @@ def run_history(
     Ua, Uc = to_U(assembly_normal), to_U(cycle_normal)
     S, n = Uc.size, bed.size
     kn, kt, level = bed.normal_stiffness, bed.tangential_stiffness, bed.level
-    t, z, d = np.zeros(n), np.zeros(n), np.zeros(n)
+    t, z, d, slip = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    U_last = float(bed.approach(np.zeros(1))[0]) if unloaded_approach is None \
+        else float(unloaded_approach)
     empty_idx = np.empty(0, np.int64)
     empty_rec = np.empty((0, n))
 
@@ -142,7 +152,7 @@ def run_history(
     gross = None
 
     def run(U_path, T_path, V0, rec):
-        nonlocal passes
+        nonlocal passes, U_last
         K = U_path.size
         V_out, Q_out = np.zeros(K), np.zeros(K)
         first = np.full(K, n, np.int64)
@@ -151,9 +161,11 @@ def run_history(
             rec_t, rec_z = np.empty((K, n)), np.empty((K, n))
         else:
             idx, rec_t, rec_z = empty_idx, empty_rec, empty_rec
-        status, p = drive(t, z, d, level, kn, kt, bed.friction, U_path, T_path,
-                          force_control, V0, idx, rec_t, rec_z, V_out, Q_out, first)
+        status, p = drive_from(t, z, d, slip, level, kn, kt, bed.friction, U_path, T_path,
+                               force_control, V0, U_last, idx, rec_t, rec_z, V_out, Q_out,
+                               first)
         passes += p
+        U_last = float(U_path[-1]) if U_path.size else U_last
         return status, V_out, Q_out, first, rec_t, rec_z
 
     def record(U_path, V_out, Q_out, first, theta, cycle, stop):
@@ -184,14 +196,14 @@ def run_history(
     V_prev, Q_prev = (float(Va[stop - 1]), float(Qa[stop - 1])) if stop else (0.0, 0.0)
     theta_c = 2 * np.pi * np.arange(1, S + 1) / S
     Tc = np.asarray(cycle_tangential, float)
-    slider_diss, global_diss = [], []
+    slider_diss, global_diss, slider_slip = [], [], []
     steady, change = False, np.inf
     last_t = last_z = None
     # largest Coulomb limit of the cycle: the scale of the steadiness residual
     cap_max = bed.friction * float(np.max(kn * np.maximum(Uc.max() - level, 0.0)))
     c = 0
     while gross is None and c < max_cycles:
-        t_start, z_start, d_start = t.copy(), z.copy(), d.copy()
+        t_start, z_start, d_start, s_start = t.copy(), z.copy(), d.copy(), slip.copy()
         status, Vc, Qc, fc, rt, rz = run(Uc, Tc, V_prev, record_last_cycle)
         if status != STATUS_OK:
             gross = gross_slip_at(status, Uc, Tc, Vc, V_prev, c, float(theta_c[status]))
@@ -199,6 +211,7 @@ def run_history(
             break
         record(Uc, Vc, Qc, fc, theta_c, c, S)
         slider_diss.append(d - d_start)
+        slider_slip.append(slip - s_start)
         global_diss.append(_trapezoid_work(Qc, Vc, Q_prev, V_prev))
         if record_last_cycle:
             last_t = np.vstack([t_start[None], rt])
@@ -216,6 +229,7 @@ def run_history(
         theta=np.concatenate(thetas), cycle=np.concatenate(cyc),
         first_slip=np.concatenate(firsts),
         slider_dissipation=np.array(slider_diss).reshape(-1, n),
-        global_dissipation=np.array(global_diss), steady=steady, state_change=change,
+        global_dissipation=np.array(global_diss),
+        slider_slip=np.array(slider_slip).reshape(-1, n), steady=steady, state_change=change,
         last_t=last_t, last_z=last_z, gross_slip=gross, passes=passes,
     )

@@ -23,10 +23,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["drive", "STATUS_OK"]
+__all__ = ["drive", "drive_from", "STATUS_OK", "SLIP_TOL"]
 
 STATUS_OK = -1
 _MAX_NEWTON = 60
+#: relative overshoot of a slider's limit below which a step does not count it as slipping
+SLIP_TOL = 1e-9
 
 
 @njit(cache=True, inline="always")
@@ -146,13 +148,32 @@ def solve_tangential_force(t, kt, cap, target, guess):
 @njit(cache=True)
 def drive(t, z, d, level, kn, kt, friction, U_path, T_path, force_control, V0,
           rec_index, rec_t, rec_z, V_out, Q_out, first_slip_out):
+    """:func:`drive_from` starting at the approach ``U_path[0]``, without slip accounting.
+
+    Kept for callers of the original signature (benchmarks); new code calls
+    :func:`drive_from`, which needs the approach *before* the first step to be exact when
+    sliders touch during that step.
+    """
+    slip = np.zeros(t.size)
+    return drive_from(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_control,
+                      V0, U_path[0], rec_index, rec_t, rec_z, V_out, Q_out, first_slip_out)
+
+
+@njit(cache=True)
+def drive_from(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_control, V0,
+               U0, rec_index, rec_t, rec_z, V_out, Q_out, first_slip_out):
     """Drive the bed along a load path, updating the state in place.
+
+    The load path is linear between samples, starting from the state (U0, V0). A slider
+    that touches inside a step takes its share of the tangential increment from the moment
+    it touches (the approach being linear within the step), which makes a proportional
+    path (V = λ (Q/P) U, Ciavarella 1998; Jäger 1998) exact at any step count.
 
     Parameters
     ----------
-    t, z, d : (n,) arrays
-        Tangential force (N), base slip (m) and accumulated dissipation (J) per slider
-        (updated in place).
+    t, z, d, slip : (n,) arrays
+        Tangential force (N), base slip (m), accumulated dissipation (J) and accumulated
+        absolute slip Σ|Δz| while in contact (m) per slider (updated in place).
     level, kn, kt : (n,) arrays
         Levels s_i (m), normal and tangential stiffnesses (N/m).
     friction : float
@@ -161,14 +182,17 @@ def drive(t, z, d, level, kn, kt, friction, U_path, T_path, force_control, V0,
     T_path : (K,) array
         Tangential force Q (force control) or displacement V (displacement control).
     force_control : bool
-    V0 : float
-        Tangential displacement before the first step.
+    V0, U0 : float
+        Tangential displacement and approach before the first step.
     rec_index : (R,) int array
         Ascending step indices whose slider states are copied into rec_t, rec_z (R, n).
     V_out, Q_out : (K,) arrays
         Tangential displacement and force after each step.
     first_slip_out : (K,) int array
-        Index of the lowest slider slipping in each step (n if none: full stick).
+        Index of the lowest slider slipping in each step (n if none: full stick). A slider
+        counts as slipping when its trial force exceeds its limit by more than
+        ``SLIP_TOL`` times the limit: a slider brought back exactly to its limit (a load
+        reversal, a proportional path) is not slipping because of rounding.
 
     Returns
     -------
@@ -181,7 +205,7 @@ def drive(t, z, d, level, kn, kt, friction, U_path, T_path, force_control, V0,
     cap = np.empty(n)
     ke = np.empty(n)
     V = V0
-    U_old = U_path[0]
+    U_old = U0
     r = 0
     passes = 0
     for k in range(U_path.size):
@@ -239,7 +263,7 @@ def drive(t, z, d, level, kn, kt, friction, U_path, T_path, force_control, V0,
             if x > c or x < -c:
                 tn = c if x > c else -c
                 dz = dv_i - (tn - told) / kt[i]
-                if c > 0.0:
+                if c > 0.0 and abs(x) - c > SLIP_TOL * c:
                     n_slip += 1
                     if i < first:
                         first = i
@@ -251,6 +275,8 @@ def drive(t, z, d, level, kn, kt, friction, U_path, T_path, force_control, V0,
             # O(ΔV²) pre-touch travel at half its new force (vanishes with refinement).
             d[i] += 0.5 * (told + tn) * (dv - (tn - told) / kt[i])
             z[i] += dz
+            if c > 0.0:   # a slider leaving contact releases its force; that is not slip
+                slip[i] += abs(dz)
             t[i] = tn
             q += tn
         passes += 1

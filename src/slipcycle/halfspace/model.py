@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from slipcycle.halfspace.bed import SliderBed, make_bed
+from slipcycle.halfspace.bed import SliderBed, lumped_slider_slipped, lumping_load, make_bed
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.history import HistoryResult, run_history
 from slipcycle.loading import cycle_angles, piecewise_linear_path
@@ -27,7 +27,9 @@ class HalfspaceModel:
     compliance_ratio : float
         λ_c.
     normal, tangential : PeriodicLoad
-        One-component periodic loads: P (N) or U (m); Q (N) or V (m).
+        One-component periodic loads: P (N) or U (m); Q (N) or V (m). Build harmonic ones
+        with :func:`~slipcycle.halfspace.contact_loads` (or :meth:`harmonic`), which gives
+        ``phase`` the meaning it has in case files (a lag of Q behind P).
     normal_control : {"force", "approach"}
     tangential_control : {"force", "displacement"}
     protocol : (S, 2) array
@@ -57,6 +59,22 @@ class HalfspaceModel:
     steady_tol: float = 1e-9
     profile_name: str = ""
 
+    @classmethod
+    def harmonic(cls, profile, friction: float, compliance_ratio: float, *, P0: float,
+                 P1=0.0, Q0: float = 0.0, Q1=0.0, phase=0.0, P1_phase=0.0, lam: float = 1.0,
+                 **settings) -> HalfspaceModel:
+        """A model under P = P0 + λP1 cos(θ − P1_phase), Q = Q0 + λQ1 cos(θ − phase).
+
+        Exactly the meaning of the case-file keys of the same names (see
+        :func:`~slipcycle.halfspace.contact_loads`); ``settings`` are the other fields.
+        """
+        from slipcycle.halfspace.loads import contact_loads
+
+        normal, tangential = contact_loads(P0, P1, Q0, Q1, phase, P1_phase, lam)
+        settings.setdefault("elasticity", None)
+        return cls(profile=profile, friction=friction, compliance_ratio=compliance_ratio,
+                   normal=normal, tangential=tangential, **settings)
+
     def cycle_samples(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """θ_k = 2πk/S (k = 1..S) and the normal and tangential loads there."""
         theta = cycle_angles(self.steps_per_cycle)[1:]
@@ -85,15 +103,49 @@ class HalfspaceModel:
         vals = np.concatenate([n, self.protocol[:, 0], self.normal(np.zeros(1))[:, 0]])
         return float(vals.min()), float(vals.max())
 
-    def bed(self) -> SliderBed:
-        """The slider bed covering this history's loads."""
-        lo, hi = self.normal_load_range()
+    def lumping_load(self) -> float:
+        """Load below which no slider slips in this history (0: no bound; see bed.py).
+
+        Derived from the loads the whole history reaches: the assembly states and the cycle
+        (the path is linear between them, so its extremes are among them). The first leg
+        from the unloaded state is proportional, Q/P constant, and slips nowhere while
+        |Q| < fP (Ciavarella 1998; Jäger 1998), so its small loads do not count; the
+        unloaded Q = 0 does. Under displacement control Q is not known beforehand, so
+        there is no bound.
+        """
+        if self.tangential_control != "force":
+            return 0.0
+        an = np.concatenate([self.protocol[:, 0], self.normal(np.zeros(1))[:, 0]])
+        at = np.concatenate([self.protocol[:, 1], self.tangential(np.zeros(1))[:, 0]])
+        _, cn, ct = self.cycle_samples()
+        n_all = np.concatenate([an, cn])
         if self.normal_control == "approach":
-            # convert approach range to loads with the exact profile law
-            lo, hi = _load_from_approach(self.profile, lo), _load_from_approach(self.profile, hi)
+            P_lo = _load_from_approach(self.profile, float(n_all.min()))
+            P_hi = _load_from_approach(self.profile, float(n_all.max()))
+        else:
+            P_lo, P_hi = float(n_all.min()), float(n_all.max())
+        q_all = np.concatenate([at, ct, [0.0]])
+        return float(lumping_load(P_lo, P_hi, float(q_all.min()), float(q_all.max()),
+                                  self.friction))
+
+    def has_first_touch(self) -> bool:
+        """False for laws with contact at every approach (rough): their beds must lump."""
+        return bool(np.isfinite(self.profile.approach(np.array([0.0]))[0]))
+
+    def bed(self, lump: bool = True) -> SliderBed:
+        """The slider bed covering every load level this history reaches.
+
+        Profiles with a first touch get the default bed (exact from first touch, so that
+        tractions resolve the whole contact). The rough law lumps the sliders below
+        :meth:`lumping_load`, which never slip; with ``lump=False`` (or no bound) it lumps
+        only below ``UNLUMPED_FRACTION`` of the largest load.
+        """
+        hi = self.normal_load_range()[1]
+        if self.normal_control == "approach":   # the largest load, from the exact law
+            hi = _load_from_approach(self.profile, hi)
         P_lo = None
-        if not np.isfinite(self.profile.approach(np.array([0.0]))[0]):
-            P_lo = 0.5 * lo  # profiles with no first touch (rough): lump below half the minimum
+        if not self.has_first_touch():
+            P_lo = self.lumping_load() if lump else 0.0
         return make_bed(self.profile, friction=self.friction,
                         compliance_ratio=self.compliance_ratio, P_max=hi * (1 + 1e-9),
                         n_sliders=self.n_sliders, P_lo=P_lo)
@@ -112,10 +164,19 @@ def solve(model: HalfspaceModel, *, record_last_cycle: bool = True
           ) -> tuple[SliderBed, HistoryResult]:
     """Build the slider bed and run the assembly and cycles to a steady state."""
     bed = model.bed()
+    result = _run(model, bed, record_last_cycle)
+    if not model.has_first_touch() and bed.size > 1 and bed.level[0] < bed.level[1] \
+            and lumped_slider_slipped(result.first_slip) and model.lumping_load() > 0:
+        # slip reached the lumped loads (the bound was not enough): lump (almost) nothing
+        bed = model.bed(lump=False)
+        result = _run(model, bed, record_last_cycle)
+    return bed, result
+
+
+def _run(model: HalfspaceModel, bed: SliderBed, record_last_cycle: bool) -> HistoryResult:
     an, at = model.assembly_path(bed.level[0] if model.normal_control == "approach" else 0.0)
     _, cn, ct = model.cycle_samples()
-    result = run_history(bed, an, at, cn, ct, normal_control=model.normal_control,
-                         tangential_control=model.tangential_control,
-                         max_cycles=model.max_cycles, steady_tol=model.steady_tol,
-                         record_last_cycle=record_last_cycle)
-    return bed, result
+    return run_history(bed, an, at, cn, ct, normal_control=model.normal_control,
+                       tangential_control=model.tangential_control,
+                       max_cycles=model.max_cycles, steady_tol=model.steady_tol,
+                       record_last_cycle=record_last_cycle, unloaded_approach=bed.level[0])

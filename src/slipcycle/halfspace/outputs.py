@@ -11,11 +11,11 @@ from slipcycle.halfspace.model import HalfspaceModel
 from slipcycle.halfspace.profiles import RoughExponential
 from slipcycle.io import RunOutputs
 
-__all__ = ["package", "stick_history", "w_hat"]
+__all__ = ["FLAGS", "package", "permanent_stick", "stick_history", "w_hat"]
 
 
 def w_hat(W: float, model: HalfspaceModel, P0: float) -> float:
-    """Ŵ = W/(λ_c γσ f² P0) of a rough contact (Putignano et al.; seed 001 §4.6)."""
+    """Ŵ = W/(λ_c γσ f² P0) of a rough contact (Putignano et al.; Barber 2012, §4.6)."""
     g = model.profile.gamma_sigma
     return W / (model.compliance_ratio * g * model.friction**2 * P0)
 
@@ -23,7 +23,7 @@ def w_hat(W: float, model: HalfspaceModel, P0: float) -> float:
 def stick_history(bed: SliderBed, result: HistoryResult) -> tuple[np.ndarray, np.ndarray | None]:
     """Stick load P_S (N) and stick size (m) at every step.
 
-    The stick zone is the contact area at P_S (seed 001 §4.1–4.3): sliders below the lowest
+    The stick zone is the contact area at P_S (Barber 2012, §4.1–4.3): sliders below the lowest
     slipping one. With no slip in a step the whole contact sticks (P_S = P).
     """
     P_S, size = bed.stick_extent(result.first_slip)
@@ -35,10 +35,66 @@ def stick_history(bed: SliderBed, result: HistoryResult) -> tuple[np.ndarray, np
     return P_S, size
 
 
+#: words each categorical summary entry can take
+FLAGS = {
+    "steady_state": ("steady", "gross_slip", "not_converged"),
+    "profile": ("sphere", "cylinder", "flat_punch", "power_law", "rough_exponential",
+                "tabulated"),
+    "normal_control": ("force", "approach"),
+    "tangential_control": ("force", "displacement"),
+}
+
+#: a slider whose total slip over the steady cycle is below this fraction of the largest
+#: elastic tangential travel λ f (U_max − s_min) sticks: rounding of a slider returned
+#: exactly to its limit (a load reversal) is not slip
+PERMANENT_STICK_TOL = 1e-9
+
+
+def _profile_name(profile) -> str:
+    from slipcycle.halfspace import profiles as pr
+
+    if isinstance(profile, pr.PowerLaw):
+        return "sphere" if profile.n == 2.0 else "power_law"
+    return {pr.Cylinder2D: "cylinder", pr.FlatPunch: "flat_punch",
+            pr.RoughExponential: "rough_exponential", pr.Tabulated: "tabulated"}[type(profile)]
+
+
 def _steady_label(result: HistoryResult) -> str:
     if result.gross_slip is not None:
         return "gross_slip"
     return "steady" if result.steady else "not_converged"
+
+
+def permanent_stick(bed: SliderBed, result: HistoryResult
+                    ) -> tuple[float, float | None] | None:
+    """Permanently stuck region over the last (steady) cycle: its load P_D and size.
+
+    The permanent stick zone is the contact area at P_D (Barber 2012, §4.3): the sliders
+    that neither slip nor separate at any instant of the steady cycle. Slip is judged on
+    the total slip Σ|Δz| of each slider over that cycle with the tolerance
+    ``PERMANENT_STICK_TOL`` scaled to the problem. With no slip at all the whole contact
+    at the smallest load of the cycle sticks. For constant P and Q = ±Q*, P_D = P − Q*/f
+    for every profile (Ciavarella–Jäger; Mindlin–Deresiewicz for the sphere).
+
+    Returns
+    -------
+    (P_D, size) or None
+        P_D in N (N/m for plane contacts), the stick radius/half-width in m (None without a
+        contact size); None when no cycle was completed.
+    """
+    if result.cycles_run == 0:
+        return None
+    last = result.cycle == result.cycle.max()
+    U_max, P_min = float(result.U[last].max()), float(result.P[last].min())
+    scale = bed.compliance_ratio * bed.friction * max(U_max - float(bed.level[0]), 0.0)
+    slipping = result.slider_slip[-1] > PERMANENT_STICK_TOL * scale
+    P_D = P_min
+    if slipping.any():
+        P_D = min(float(bed.edge_load[int(np.argmax(slipping))]), P_min)
+    size = None
+    if bed.edge_size is not None:
+        size = float(np.interp(P_D, bed.edge_load, bed.edge_size))
+    return P_D, size
 
 
 def package(model: HalfspaceModel, bed: SliderBed, result: HistoryResult) -> RunOutputs:
@@ -46,17 +102,22 @@ def package(model: HalfspaceModel, bed: SliderBed, result: HistoryResult) -> Run
     from slipcycle.plot import halfspace as hplot
 
     P_S, stick_size = stick_history(bed, result)
-    last = result.cycle == result.cycle.max() if result.cycles_run else np.zeros(0, bool)
     W = result.dissipation_per_cycle
     W_s = result.slider_sum_dissipation
+    per_len = "/m" if model.profile.plane else ""
+    load_unit, energy_unit = "N" + per_len, "J" + per_len
+    units = {"dissipation_per_cycle": energy_unit, "dissipation_per_cycle_sliders": energy_unit,
+             "dissipation_relative_difference": "1", "cycles_run": "1", "state_change": "1",
+             "sliders": "1", "friction": "1", "compliance_ratio": "1"}
     summary: dict = {
         "model": "halfspace",
-        "profile": model.profile_name or type(model.profile).__name__,
+        "profile": model.profile_name or _profile_name(model.profile),
         "steady_state": _steady_label(result),
         "dissipation_per_cycle": W if result.gross_slip is None else None,
         "dissipation_per_cycle_sliders": W_s if result.gross_slip is None else None,
         "dissipation_relative_difference": (abs(W - W_s) / max(abs(W), 1e-300)
-                                            if result.cycles_run and W != 0 else 0.0),
+                                            if result.cycles_run and W != 0 else 0.0)
+                                            if result.gross_slip is None else None,
         "cycles_run": result.cycles_run,
         "state_change": result.state_change,
         "sliders": bed.size,
@@ -65,40 +126,62 @@ def package(model: HalfspaceModel, bed: SliderBed, result: HistoryResult) -> Run
         "normal_control": model.normal_control,
         "tangential_control": model.tangential_control,
         "gross_slip": None,
-        "units": {"dissipation_per_cycle": "J" + ("/m" if model.profile.plane else ""),
-                  "load": "N" + ("/m" if model.profile.plane else ""), "length": "m"},
+        "units": units,
     }
     if model.elasticity is not None:
         summary["contact_modulus"] = model.elasticity.contact_modulus
         summary["dundurs_beta"] = model.elasticity.dundurs_beta
+        units.update(contact_modulus="Pa", dundurs_beta="1")
         if abs(model.elasticity.dundurs_beta) > 0.05:
             summary["warnings"] = [f"Dundurs beta = {model.elasticity.dundurs_beta:.3f}: the "
                                    "materials are dissimilar, so the uncoupled theory is "
                                    "approximate"]
     if result.gross_slip is not None:
         g = result.gross_slip
+        # when: step and cycle (-1: during the assembly path) and angle; where: P and Q
         summary["gross_slip"] = {"step": g.step, "cycle": g.cycle, "theta": g.theta,
                                  "P": g.P, "Q": g.Q}
-    if last.any():
-        summary["permanent_stick_load"] = float(P_S[last].min())  # P_D of seed 001 §4.3
-        if stick_size is not None:
-            summary["permanent_stick_size"] = float(stick_size[last].min())
+        units.update({"gross_slip.step": "1", "gross_slip.cycle": "1",
+                      "gross_slip.theta": "rad", "gross_slip.P": load_unit,
+                      "gross_slip.Q": load_unit})
+    stick = permanent_stick(bed, result) if result.gross_slip is None else None
+    if stick is not None:
+        summary["permanent_stick_load"] = stick[0]
+        units["permanent_stick_load"] = load_unit
+        if stick[1] is not None:
+            last = result.cycle == result.cycle.max()
+            summary["permanent_stick_size"] = stick[1]
             summary["contact_size_max"] = float(np.interp(result.P[last].max(), bed.edge_load,
                                                           bed.edge_size))
+            units.update(permanent_stick_size="m", contact_size_max="m")
     if isinstance(model.profile, RoughExponential) and result.gross_slip is None:
         P0 = float(model.normal.mean[0]) if hasattr(model.normal, "mean") else None
         if P0 and model.normal_control == "force":
             summary["W_hat"] = w_hat(W, model, P0)
+            units["W_hat"] = "1"
 
     ds = _dataset(model, bed, result, P_S, stick_size)
+    if stick is not None:
+        ds["permanent_stick_load"] = ((), stick[0], {
+            "units": load_unit, "long_name": "load P_D whose contact area never slips"})
+        if stick[1] is not None:
+            ds["permanent_stick_size"] = ((), stick[1], {
+                "units": "m", "long_name": "radius/half-width of the permanent stick zone"})
+    if result.gross_slip is not None:
+        g = result.gross_slip
+        ds["gross_slip_P"] = ((), g.P, {"units": load_unit,
+                                        "long_name": "normal load at gross slip"})
+        ds["gross_slip_Q"] = ((), g.Q, {"units": load_unit,
+                                        "long_name": "tangential load at gross slip"})
     figures = {"hysteresis": lambda: hplot.hysteresis(ds),
                "load_path": lambda: hplot.load_path(ds, model.friction)}
     if "shear_traction" in ds:
         figures["tractions"] = lambda: hplot.tractions(ds)
         figures["dissipation_density"] = lambda: hplot.dissipation_density(ds)
-    if stick_size is not None:
+    if stick_size is not None and result.cycles_run:
         figures["stick_zone"] = lambda: hplot.stick_zone(ds)
-    return RunOutputs(summary=summary, dataset=ds, figures=figures)
+    flags = {k: v for k, v in FLAGS.items() if k in summary}
+    return RunOutputs(summary=summary, dataset=ds, figures=figures, flags=flags)
 
 
 def _dataset(model, bed, result, P_S, stick_size) -> xr.Dataset:
@@ -124,7 +207,8 @@ def _dataset(model, bed, result, P_S, stick_size) -> xr.Dataset:
     if stick_size is not None:
         ds["stick_size"] = ("step", stick_size, {"units": "m",
                                                  "long_name": "stick zone radius/half-width"})
-    if model.profile.axisymmetric and bed.edge_size is not None and result.last_t is not None:
+    if model.profile.axisymmetric and bed.edge_size is not None and result.last_t is not None \
+            and result.gross_slip is None:
         _add_tractions(ds, model, bed, result)
     return ds
 

@@ -1,4 +1,4 @@
-"""Normal force–approach laws P(U) of the contact profiles of SPEC §4.
+"""Normal force–approach laws P(U) of the contact profiles of the case-file format.
 
 A profile is described by its approach U(P) and incremental normal compliance
 C(P) = dU/dP, both as functions of the normal load P (N, or N/m for plane problems), and,
@@ -97,7 +97,7 @@ class Cylinder2D:
     Half-width a = (4PR/(πE*))^{1/2}. Plane displacements need a reference point; with a
     point at depth d below the surface on the axis of symmetry the approach is
     U = (P/(πE*)) [ln(4d²/a²) − 1] (Johnson 1985, eq. 5.41 form), so the incremental
-    compliance C = (ln(4d²/a²) − 2)/(πE*). The dissipation does not depend on d (seed 001
+    compliance C = (ln(4d²/a²) − 2)/(πE*). The dissipation does not depend on d (Barber 2012,
     §4.5); d defaults to R. Valid while C > 0, i.e. a < 2d/e.
     """
 
@@ -160,7 +160,7 @@ class FlatPunch:
 
 @dataclass(frozen=True)
 class RoughExponential:
-    """Nominally flat rough contact with dP/dU = P/(γσ) (seed 001 eq. 10, Akarapu et al.).
+    """Nominally flat rough contact with dP/dU = P/(γσ) (Barber 2012, eq. 10; Akarapu et al.).
 
     P = P_ref exp(U/γσ); the approach is measured from the level where P = P_ref (1 N by
     default; the choice does not affect anything physical).

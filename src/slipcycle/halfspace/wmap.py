@@ -1,13 +1,15 @@
-"""Dimensionless dissipation map Ŵ(P̂1, Q̂1, φ) of rough contacts (seed 001 §4.6).
+"""Dimensionless dissipation map Ŵ(P̂1, Q̂1, φ) of rough contacts (Barber 2012, §4.6).
 
 For the rough law dP/dU = P/(γσ) the dissipation per cycle under
 P = P0(1 + P̂1 cos θ), Q = f P0 Q̂1 cos(θ − φ) scales as W = λ_c γσ f² P0 Ŵ(P̂1, Q̂1, φ)
 (Putignano et al.), so the map is computed once with P0 = γσ = f = λ_c = 1. Every grid
 point runs the same slider bed through a normal preload, a tangential ramp to the start
 of the cycle and two cycles (the second is steady for an uncoupled bed: frictional Melan
-theorem; tests check it against a third). Each point gets its own bed: sliders that stay
-below every stick load of the history are lumped, the rest equally spaced in load. Grid
-points run in parallel threads (Numba ``prange``) without Python overhead per point.
+theorem; tests check it against a third). Each point gets its own bed, built by the same
+compiled functions as ``slipcycle run`` (:func:`~slipcycle.halfspace.bed.rough_unit_bed`,
+:func:`~slipcycle.halfspace.bed.lumping_load`): sliders that stay below every stick load of
+the history are lumped, the rest equally spaced in load. Grid points run in parallel
+threads (Numba ``prange``) without Python overhead per point.
 """
 
 from __future__ import annotations
@@ -15,50 +17,26 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from slipcycle.halfspace.kernels import drive
+from slipcycle.halfspace.bed import UNLUMPED_FRACTION, lumping_load, rough_unit_bed
+from slipcycle.halfspace.kernels import drive_from
 
 __all__ = ["w_hat_map", "w_hat_point"]
 
 
 @njit(cache=True)
-def _rough_bed(P_lo, P_max, n):
-    """Slider bed of P = exp(U) (γσ = 1) exact at n+1 equally spaced loads in [P_lo, P_max],
-    with everything below P_lo lumped into one slider (same construction as make_bed)."""
-    level = np.empty(n + 1)
-    kn = np.empty(n + 1)
-    level[0] = np.log(P_lo) - 1.0          # reproduces P and dP/dU at P_lo
-    kn[0] = P_lo
-    dP = (P_max - P_lo) / n
-    for j in range(n):
-        Pa = P_lo + j * dP
-        Pb = Pa + dP
-        kn[j + 1] = dP                      # ΔS with S = dP/dU = P
-        level[j + 1] = (np.log(Pb) * Pb - np.log(Pa) * Pa - dP) / dP
-    K = np.cumsum(kn)
-    M = np.cumsum(kn * level)
-    P_knots = np.empty(n + 1)
-    P_knots[0] = 0.0
-    for j in range(1, n + 1):
-        P_knots[j] = K[j - 1] * level[j] - M[j - 1]
-    return level, kn, K, M, P_knots
-
-
-@njit(cache=True)
-def _one_point(P1, Q1, phi, n_sliders, steps, asm_steps, cycles):
-    """Ŵ of the last of ``cycles`` cycles; nan when |Q| reaches fP somewhere (gross slip)."""
+def _path(P1, Q1, phi, level, kn, steps, asm_steps, cycles):
+    """Approach and tangential load at every step: preload, tangential ramp, cycles."""
     P_start = 1.0 + P1
     Q_start = Q1 * np.cos(-phi)
-    # Sliders whose load level stays below every stick load P_S = P - |ΔQ|/f of the history
-    # never slip; lumping them costs nothing and puts the resolution where slip happens.
-    bound = min(1.0 - P1 - 2.0 * Q1, P_start - abs(Q_start))
-    P_lo = 0.9 * bound if bound > 0.05 * (1.0 - P1) else 0.05 * (1.0 - P1)
-    level, kn, K, M, P_knots = _rough_bed(P_lo, P_start * (1 + 1e-9), n_sliders)
-    kt = kn.copy()
-    n = level.size
+    K = np.cumsum(kn)
+    M = np.cumsum(kn * level)
+    P_knots = np.empty(level.size)
+    P_knots[0] = 0.0
+    for j in range(1, level.size):
+        P_knots[j] = K[j - 1] * level[j] - M[j - 1]
     total = 2 * asm_steps + cycles * steps
     U = np.empty(total)
     T = np.empty(total)
-    # loads: preload P(0) at Q = 0, ramp Q to Q(0), then the cycles
     for k in range(total):
         if k < asm_steps:
             P = P_start * (k + 1) / asm_steps
@@ -74,22 +52,62 @@ def _one_point(P1, Q1, phi, n_sliders, steps, asm_steps, cycles):
         j = max(np.searchsorted(P_knots, P, side="right") - 1, 0)
         U[k] = (P + M[j]) / K[j]
         T[k] = Q
+    return U, T
+
+
+@njit(cache=True)
+def _run_point(P1, Q1, phi, P_lo, n_sliders, steps, asm_steps, cycles):
+    """(Ŵ of the last cycle or nan at gross slip, lowest slipping slider index)."""
+    P_max = (1.0 + abs(P1)) * (1 + 1e-9)    # the largest load, θ = 0
+    level, kn, _ = rough_unit_bed(P_lo, P_max, n_sliders)
+    kt = kn.copy()
+    n = level.size
+    U, T = _path(P1, Q1, phi, level, kn, steps, asm_steps, cycles)
+    total = U.size
     t = np.zeros(n)
     z = np.zeros(n)
     d = np.zeros(n)
+    slip = np.zeros(n)
     V_out = np.empty(total)
     Q_out = np.empty(total)
     first = np.empty(total, np.int64)
     idx = np.empty(0, np.int64)
     rec = np.empty((0, n))
-    status, _ = drive(t, z, d, level, kn, kt, 1.0, U, T, True, 0.0, idx, rec, rec,
-                      V_out, Q_out, first)
+    status, _ = drive_from(t, z, d, slip, level, kn, kt, 1.0, U, T, True, 0.0, level[0], idx,
+                           rec, rec, V_out, Q_out, first)
     if status >= 0:
-        return np.nan
+        return np.nan, 0
     s0 = total - steps - 1
     W = 0.0
     for k in range(s0 + 1, total):
         W += 0.5 * (Q_out[k] + Q_out[k - 1]) * (V_out[k] - V_out[k - 1])
+    return W, first.min()
+
+
+@njit(cache=True)
+def _one_point(P1, Q1, phi, n_sliders, steps, asm_steps, cycles):
+    """Ŵ of the last of ``cycles`` cycles; nan when |Q| reaches fP somewhere (gross slip).
+
+    The bed is the one :meth:`HalfspaceModel.bed` builds for the same history: sliders
+    below :func:`~slipcycle.halfspace.bed.lumping_load` are lumped, and the point is rerun
+    on an unlumped bed should slip reach them.
+    """
+    # extremes of the loads the history visits: the start state and the cycle's samples
+    # (the path is linear between them), as HalfspaceModel.lumping_load takes them
+    P_min = P_max = 1.0 + P1
+    Q_lo = Q_hi = Q1 * np.cos(-phi)
+    for k in range(1, steps + 1):
+        th = 2.0 * np.pi * k / steps
+        P = 1.0 + P1 * np.cos(th)
+        Q = Q1 * np.cos(th - phi)
+        P_min, P_max = min(P_min, P), max(P_max, P)
+        Q_lo, Q_hi = min(Q_lo, Q), max(Q_hi, Q)
+    P_lo = lumping_load(P_min, P_max, Q_lo, Q_hi, 1.0)
+    fallback = UNLUMPED_FRACTION * P_max
+    W, first = _run_point(P1, Q1, phi, P_lo if P_lo > 0.0 else fallback, n_sliders, steps,
+                          asm_steps, cycles)
+    if P_lo > 0.0 and first <= 1 and not np.isnan(W):
+        W, first = _run_point(P1, Q1, phi, fallback, n_sliders, steps, asm_steps, cycles)
     return W
 
 

@@ -1,4 +1,4 @@
-"""Periodic load functions of the cycle angle θ = Ωt (SPEC §1).
+"""Periodic load functions of the cycle angle θ = Ωt.
 
 A load has ``m`` components (nodes, or P and Q of a contact). Two forms:
 
@@ -8,6 +8,22 @@ A load has ``m`` components (nodes, or P and Q of a contact). Two forms:
 Solvers sample a cycle at ``steps_per_cycle`` equal angles (:func:`cycle_angles`) and take
 the load path between samples to be linear; assembly protocols are polylines through given
 load states (:func:`piecewise_linear_path`).
+
+Phase convention (the one place it is stated; other modules refer here)
+-----------------------------------------------------------------------
+:class:`HarmonicLoad` stores *leads* α_h: X = X0 + λ Σ X_h cos(hθ + α_h). Two families of
+case files use two words, each with the meaning of its literature:
+
+- coupled discrete systems (``p1_phase``, ``q1_phase``) give leads α_h directly:
+  p = p0 + λ p1 cos(θ + p1_phase);
+- half-space contacts give *lags* of the load behind the normal-load reference,
+  P = P0 + λ P1 cos(θ − P1_phase), Q = Q0 + λ Q1 cos(θ − phase), the convention of the
+  rough-contact dissipation map Ŵ(P̂1, Q̂1, φ) (Putignano, Ciavarella & Barber 2011): a
+  positive ``phase`` φ means Q reaches its maximum φ/(2π) of a cycle after P. For
+  harmonic h the lag is in the harmonic's own angle, cos(hθ − φ_h).
+
+Build lag-specified loads with :meth:`HarmonicLoad.lagging` (α_h = −φ_h), and half-space
+loads with :func:`slipcycle.halfspace.contact_loads`, which is what the case parser calls.
 """
 
 from __future__ import annotations
@@ -34,7 +50,7 @@ class PeriodicLoad(Protocol):
 
 @dataclass(frozen=True)
 class HarmonicLoad:
-    """X(θ) = X0 + λ Σ_h X_h cos(hθ + α_h).
+    """X(θ) = X0 + λ Σ_h X_h cos(hθ + α_h): α_h are leads (module docstring: phases).
 
     Parameters
     ----------
@@ -74,6 +90,14 @@ class HarmonicLoad:
 
     def with_lam(self, lam: float) -> HarmonicLoad:
         return HarmonicLoad(self.mean, self.amplitudes, self.phases, lam)
+
+    @classmethod
+    def lagging(cls, mean, amplitudes, lags, lam: float = 1.0) -> HarmonicLoad:
+        """X(θ) = X0 + λ Σ_h X_h cos(hθ − φ_h): harmonics given by their lags φ_h (rad).
+
+        Same shapes as the constructor; see the module docstring for the convention.
+        """
+        return cls(mean, amplitudes, -np.asarray(lags, float), lam)
 
 
 @dataclass(frozen=True)

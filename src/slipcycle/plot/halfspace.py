@@ -11,23 +11,51 @@ __all__ = ["hysteresis", "load_path", "tractions", "dissipation_density", "stick
 
 
 def _last_cycle(ds: xr.Dataset) -> xr.Dataset:
-    return ds.isel(step=np.flatnonzero(ds.cycle.values == ds.cycle.values.max()))
+    """The last *completed* cycle (empty when none completed)."""
+    n_done = ds.sizes.get("cycle_run", 0)
+    return ds.isel(step=np.flatnonzero(ds.cycle.values == n_done - 1) if n_done else [])
+
+
+def _partial_cycle(ds: xr.Dataset) -> xr.Dataset:
+    """Steps of a cycle cut short by gross slip (empty otherwise)."""
+    n_done = ds.sizes.get("cycle_run", 0)
+    return ds.isel(step=np.flatnonzero(ds.cycle.values == n_done))
+
+
+def _mark_gross_slip(ax, ds: xr.Dataset, x: str) -> None:
+    """Cross at the state where gross slip was reached (x: "V" or "P")."""
+    if "gross_slip_Q" not in ds:
+        return
+    if x == "P":
+        xv = float(ds.gross_slip_P)
+    else:  # the last displacement reached before gross slip
+        xv = float(ds.V.values[-1]) * 1e6 if ds.sizes["step"] else 0.0
+    ax.plot([xv], [float(ds.gross_slip_Q)], "x", color="C3", ms=9, mew=2,
+            label="gross slip (first state with |Q| ≥ fP)")
 
 
 def hysteresis(ds: xr.Dataset) -> Figure:
-    """Tangential load Q against displacement V: assembly and the last cycle."""
+    """Tangential load Q against displacement V: assembly, last completed cycle, gross slip."""
     fig = Figure(figsize=(5.5, 4.2))
     ax = fig.add_subplot()
     asm = ds.isel(step=np.flatnonzero(ds.cycle.values < 0))
-    last = _last_cycle(ds)
-    ax.plot(asm.V * 1e6, asm.Q, color="0.6", lw=1, label="assembly")
-    ax.plot(last.V * 1e6, last.Q, color="C0", lw=1.8, label="last cycle")
-    W = float(ds.dissipation.values[-1]) if ds.sizes.get("cycle_run", 0) else float("nan")
-    ax.set_title(f"Hysteresis loop  (∮Q dV = {W:.4g} {ds.dissipation.attrs['units']})")
+    last, part = _last_cycle(ds), _partial_cycle(ds)
+    ax.plot(np.r_[0.0, asm.V.values] * 1e6, np.r_[0.0, asm.Q.values], color="0.6", lw=1,
+            label="assembly")
+    if last.sizes["step"]:
+        ax.plot(last.V * 1e6, last.Q, color="C0", lw=1.8, label="last cycle")
+    if part.sizes["step"]:
+        ax.plot(part.V * 1e6, part.Q, color="C1", lw=1.2, label="cycle cut by gross slip")
+    _mark_gross_slip(ax, ds, "V")
+    if "gross_slip_Q" in ds:
+        ax.set_title("Hysteresis: gross slip, no steady cycle")
+    elif ds.sizes.get("cycle_run", 0):
+        W = float(ds.dissipation.values[-1])
+        ax.set_title(f"Hysteresis loop  (∮Q dV = {W:.4g} {ds.dissipation.attrs['units']})")
     ax.set_xlabel("tangential displacement V [µm]")
     ax.set_ylabel(f"tangential load Q [{ds.Q.attrs['units']}]")
     ax.grid(alpha=0.3)
-    ax.legend()
+    ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
 
@@ -36,13 +64,23 @@ def load_path(ds: xr.Dataset, friction: float) -> Figure:
     """Load path in the P–Q plane with the friction cone |Q| = fP."""
     fig = Figure(figsize=(5.5, 4.2))
     ax = fig.add_subplot()
-    Pmax = float(ds.P.max()) * 1.1
+    Pmax = max(float(ds.P.max()) if ds.sizes["step"] else 0.0,
+               float(ds.gross_slip_P) if "gross_slip_P" in ds else 0.0) * 1.1 or 1.0
     ax.fill_between([0, Pmax], [0, friction * Pmax], [0, -friction * Pmax], color="C2",
                     alpha=0.08, label=f"partial slip |Q| < fP (f = {friction:g})")
     asm = ds.isel(step=np.flatnonzero(ds.cycle.values < 0))
-    last = _last_cycle(ds)
-    ax.plot(asm.P, asm.Q, color="0.6", lw=1, label="assembly")
-    ax.plot(last.P, last.Q, color="C0", lw=1.8, label="periodic cycle")
+    last, part = _last_cycle(ds), _partial_cycle(ds)
+    # the assembly starts unloaded; if it ends in gross slip, it ends at that state
+    P_a, Q_a = np.r_[0.0, asm.P.values], np.r_[0.0, asm.Q.values]
+    if "gross_slip_P" in ds and not ds.sizes.get("cycle_run", 0) \
+            and not _partial_cycle(ds).sizes["step"]:
+        P_a, Q_a = np.r_[P_a, float(ds.gross_slip_P)], np.r_[Q_a, float(ds.gross_slip_Q)]
+    ax.plot(P_a, Q_a, color="0.6", lw=1, label="assembly")
+    if last.sizes["step"]:
+        ax.plot(last.P, last.Q, color="C0", lw=1.8, label="periodic cycle")
+    if part.sizes["step"]:
+        ax.plot(part.P, part.Q, color="C1", lw=1.2, label="cycle cut by gross slip")
+    _mark_gross_slip(ax, ds, "P")
     ax.set_xlabel(f"normal load P [{ds.P.attrs['units']}]")
     ax.set_ylabel(f"tangential load Q [{ds.Q.attrs['units']}]")
     ax.set_xlim(0, Pmax)
@@ -77,8 +115,8 @@ def dissipation_density(ds: xr.Dataset) -> Figure:
     fig = Figure(figsize=(5.5, 4.0))
     ax = fig.add_subplot()
     ax.plot(ds.radius * 1e3, ds.dissipation_density, color="C3")
-    if "stick_size" in ds:
-        c = float(_last_cycle(ds).stick_size.min()) * 1e3
+    if "permanent_stick_size" in ds:
+        c = float(ds.permanent_stick_size) * 1e3
         ax.axvline(c, color="0.4", ls=":", label=f"permanent stick radius {c:.3g} mm")
         ax.legend()
     ax.set_xlabel("radius r [mm]")
@@ -104,7 +142,7 @@ def stick_zone(ds: xr.Dataset) -> Figure:
 
 
 def w_hat_vs_phase(ds: xr.Dataset, P1_hat: float) -> Figure:
-    """Ŵ against the phase φ for several Q̂1 at fixed P̂1 (seed 001 Fig. 7)."""
+    """Ŵ against the phase φ for several Q̂1 at fixed P̂1 (Barber 2012, Fig. 7)."""
     fig = Figure(figsize=(6.0, 4.2))
     ax = fig.add_subplot()
     sub = ds.W_hat.sel(P1_hat=P1_hat, method="nearest")
