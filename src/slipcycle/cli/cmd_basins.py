@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from slipcycle.cli.cmd_sweep import add_common, as_case_error, store_dataset
+from slipcycle.discrete.sizes import cells_bytes, check_memory, count_option
 
 
 def add_parser(sub) -> None:
@@ -34,8 +35,10 @@ def add_parser(sub) -> None:
     p.add_argument("case", type=Path, help="TOML case file (model = \"discrete\")")
     p.add_argument("--out", type=Path, required=True, help="output directory")
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--grid", type=int, default=None, help="N = 2: grid points per axis")
-    g.add_argument("--random", type=int, default=None, help="random initial states")
+    g.add_argument("--grid", type=count_option, default=None,
+                   help="N = 2: grid points per axis")
+    g.add_argument("--random", type=count_option, default=None,
+                   help="random initial states")
     g.add_argument("--protocols", type=Path, default=None, help="TOML file of protocols")
     p.add_argument("--v1", default=None, help="grid range a:b of v1 [m]")
     p.add_argument("--v2", default=None, help="grid range a:b of v2 [m]")
@@ -43,6 +46,24 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed")
     add_common(p)
     p.set_defaults(execute=execute)
+
+
+#: unit of every numeric summary entry (nested entries by their path)
+SUMMARY_UNITS = {
+    "lam": "1", "n_nodes": "1", "lambda1": "1", "lambda2": "1", "starts": "1",
+    "class_counts": "1", "dissipation_per_cycle.min": "J",
+    "dissipation_per_cycle.max": "J", "both_outcomes": "1", "wall_time_s": "s",
+    "boundary_box_counting_dimension": "1", "box_counting.dimension": "1",
+    "box_counting.sizes": "1", "box_counting.counts": "1",
+    "box_counting.boundary_cells": "1", "grid": "1",
+}
+
+#: every word of the categorical summary entries
+SUMMARY_FLAGS = {"mode": ("grid", "random", "protocols")}
+
+CONVERGED_ATTRS = {"units": "1", "long_name": "the start reached a steady state (shakedown, "
+                   "cyclic slip or ratcheting) within run.cycles; false for not_converged, "
+                   "inadmissible and failed starts"}
 
 
 def _range(text, key):
@@ -136,8 +157,12 @@ def execute(args: argparse.Namespace) -> int:
         if n != 2:
             raise CaseError("--grid", f"needs a two-node system (this one has {n} nodes); "
                             "use --random or --protocols")
-        if not 2 <= args.grid <= 4001:
-            raise CaseError("--grid", f"must be between 2 and 4001, got {args.grid}")
+        if args.grid < 2:
+            raise CaseError("--grid", f"must be >= 2, got {args.grid}")
+        # a grid row is one task returning arrays: per start, the class, D, D_j, counts
+        # (8 numbers) held ~4 times (rows, store, Dataset, figure)
+        check_memory("--grid", float(args.grid) ** 2 * 8 * (n + 8) * 4,
+                     f"{args.grid:g} × {args.grid:g} starts")
         box = admissible_box(dc.system, load)
         if args.v1:
             box[0] = _range(args.v1, "--v1")
@@ -157,6 +182,8 @@ def execute(args: argparse.Namespace) -> int:
     elif mode == "random":
         if args.random < 1:
             raise CaseError("--random", f"must be >= 1, got {args.random}")
+        check_memory("--random", cells_bytes(args.random, n) + 8.0 * args.random * n * 8,
+                     f"{args.random:g} random starts ({n} nodes)")
         V = sample_initial_slips(dc.system, load, args.random, seed=args.seed)
         if V.shape[0] == 0:
             raise CaseError("loading.lam", f"no slip state is admissible at θ = 0 for λ = "
@@ -195,6 +222,9 @@ def execute(args: argparse.Namespace) -> int:
     cls = data["steady_state"]
     counts = {STEADY_CODES[c]: int((cls == c).sum()) for c in np.unique(cls)}
     adm = cls != STEADY_CODES.index("inadmissible")
+    # reached a steady state (shakedown, cyclic slip or ratcheting) within run.cycles
+    converged = np.isin(cls, [STEADY_CODES.index(c) for c in
+                              ("shakedown", "cyclic_slip", "ratcheting")])
     D = data["dissipation_per_cycle"]
     summary = {"model": "discrete", "analysis": "basins", "mode": mode, "lam": lam,
                "n_nodes": n, "lambda1": l1, "lambda2": l2, "starts": int(cls.size),
@@ -204,7 +234,8 @@ def execute(args: argparse.Namespace) -> int:
                                          "max": float(np.nanmax(D[adm])) if adm.any()
                                          else None},
                "both_outcomes": bool((cls == 0).any() and (cls == 1).any()),
-               "steady_state_codes": list(STEADY_CODES), "wall_time_s": wall}
+               "steady_state_codes": list(STEADY_CODES), "wall_time_s": wall,
+               "units": dict(SUMMARY_UNITS)}
     figures = {}
     if mode == "grid":
         import xarray as xr
@@ -223,13 +254,16 @@ def execute(args: argparse.Namespace) -> int:
                                       {"units": "J"}),
              "cycles_run": (("v2", "v1"), data["cycles_run"], {"units": "1"}),
              "n_slipping": (("v2", "v1"), data["n_slipping"], {"units": "1"}),
-             "memory_erased": (("v2", "v1"), data["memory_erased"], {"units": "1"})},
-            coords={"v1": ("v1", v1, {"units": "m", "long_name": "initial slip of node 1"}),
-                    "v2": ("v2", v2, {"units": "m", "long_name": "initial slip of node 2"})})
+             "memory_erased": (("v2", "v1"), data["memory_erased"], {"units": "1"}),
+             "converged": (("v2", "v1"), converged, CONVERGED_ATTRS)},
+            coords={"v1": ("v1", v1, {"units": "m", "long_name": "initial slip of node 0"}),
+                    "v2": ("v2", v2, {"units": "m", "long_name": "initial slip of node 1"})})
         figures["basin_map"] = lambda: basin_map(v1, v2, cls, D, region, lam)
     else:
         ds = store_dataset(store, axes)
-    write_outputs(args.out, RunOutputs(summary=summary, dataset=ds, figures=figures),
+        ds["converged"] = (tuple(ds["steady_state"].dims), converged, CONVERGED_ATTRS)
+    write_outputs(args.out, RunOutputs(summary=summary, dataset=ds, figures=figures,
+                                       flags=dict(SUMMARY_FLAGS)),
                   case.text, case.path)
     print(json.dumps({k: summary[k] for k in ("starts", "class_counts", "both_outcomes",
                                               "lambda1", "lambda2")}, indent=2))

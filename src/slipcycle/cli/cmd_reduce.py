@@ -12,6 +12,7 @@ import argparse
 import json
 import os
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 
@@ -29,17 +30,72 @@ def add_parser(sub) -> None:
     p.set_defaults(execute=execute)
 
 
-def _write_text_atomic(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent)
+def _fs_error(path: Path, exc: OSError):
+    from slipcycle.io import CaseError
+
+    return CaseError(str(path), f"cannot write: {exc.strerror or exc}")
+
+
+def write_together(outputs: list[tuple[Path, Callable[[Path], None]]]) -> None:
+    """Write several files so that either all of them appear or none does.
+
+    Each ``(path, write)`` is first written by ``write(tmp)`` to a temporary file beside
+    ``path``; only when every one is complete are they renamed into place. If a rename
+    fails, the targets already replaced get their previous content back. Directories
+    created for the outputs are removed again on failure. Any file-system problem is one
+    :class:`~slipcycle.io.CaseError` naming the path.
+    """
+    created: list[Path] = []
+    staged: list[tuple[Path, Path]] = []
+    backups: list[tuple[Path, Path | None]] = []
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+        for path, write in outputs:
+            missing = [d for d in [path.parent, *path.parent.parents] if not d.exists()]
+            try:
+                for d in reversed(missing):
+                    d.mkdir()
+                    created.append(d)
+                fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial",
+                                           dir=path.parent)
+                os.close(fd)
+                staged.append((Path(tmp), path))
+                write(Path(tmp))
+                os.chmod(tmp, 0o644)
+            except OSError as exc:
+                raise _fs_error(path, exc) from None
+        for tmp, path in staged:
+            try:
+                old = None
+                if path.exists():
+                    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".old",
+                                                dir=path.parent)
+                    os.close(fd)
+                    old = Path(name)
+                    os.replace(path, old)
+                backups.append((path, old))
+                os.replace(tmp, path)
+            except OSError as exc:
+                raise _fs_error(path, exc) from None
+    except BaseException:
+        for path, old in reversed(backups):        # undo the renames already made
+            try:
+                if old is not None:
+                    os.replace(old, path)
+                elif path.exists():
+                    path.unlink()
+            except OSError:
+                pass
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+        for d in reversed(created):
+            try:
+                d.rmdir()
+            except OSError:
+                pass
+        raise
+    for _, old in backups:
+        if old is not None:
+            old.unlink(missing_ok=True)
 
 
 def execute(args: argparse.Namespace) -> int:
@@ -62,6 +118,13 @@ def execute(args: argparse.Namespace) -> int:
     return 0
 
 
+def _savez(path: Path, arrays: dict) -> None:
+    import numpy as np
+
+    with open(path, "wb") as fh:
+        np.savez_compressed(fh, **arrays)
+
+
 def _import(args, provenance) -> dict:
     import numpy as np
 
@@ -81,18 +144,7 @@ def _import(args, provenance) -> dict:
     data = {k: v for k, v in data.items() if k != "metadata"}
     data["dof_order"] = np.array("tangential_first")
     data["metadata"] = np.array(json.dumps(meta))
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{args.out.name}.", suffix=".partial.npz",
-                               dir=args.out.parent)
-    os.close(fd)
-    try:
-        with open(tmp, "wb") as fh:
-            np.savez_compressed(fh, **data)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, args.out)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    write_together([(args.out, lambda tmp: _savez(tmp, data))])
     n = data["A"].shape[0]
     return {"n_contact_nodes": n, "imported_from": str(args.model),
             "coupling_B_over_A": float(np.linalg.norm(data["B"]) / np.linalg.norm(data["A"]))}
@@ -123,9 +175,11 @@ def _reduce(args, provenance) -> dict:
     if args.case is not None:
         rel = os.path.relpath(args.out.resolve(), args.case.resolve().parent)
         text = discrete_case_text(discrete, reduced, rel)
-    reduced.save(args.out, provenance(case.text, case.path))
+    meta = provenance(case.text, case.path)
+    outputs = [(args.out, lambda tmp: reduced.save(tmp, meta, atomic=False))]
     if text is not None:
-        _write_text_atomic(args.case, text)
+        outputs.append((args.case, lambda tmp: tmp.write_text(text, encoding="utf-8")))
+    write_together(outputs)
     info = {k: v for k, v in reduced.info.items() if k in (
         "geometry", "n_dofs", "n_contact_nodes", "element", "condense_seconds")}
     info["load_cases"] = reduced.load_cases

@@ -29,6 +29,34 @@ from pathlib import Path
 import numpy as np
 
 from slipcycle.cli.cmd_sweep import add_common, as_case_error
+from slipcycle.discrete.sizes import count_option
+
+#: unit of every numeric summary entry (λ values are load factors: "1"; nested entries
+#: by their path)
+SUMMARY_UNITS = {
+    "n_nodes": "1", "lambda1": "1", "lambda1_bracket": "1", "lambda2": "1",
+    "lambda3_bracket": "1", "lambda4_bracket": "1", "lambda3_grid_bracket": "1",
+    "lambda4_grid_bracket": "1", "constraints.G": "N/m", "constraints.h0": "N",
+    "constraints.m": "N", "constraints.theta_extreme": "rad", "last_safe_state": "m",
+    "lam": "1", "dissipation_per_cycle": "J", "refinement_runs": "1",
+    "refinement.lam_tol": "1", "refinement.lam_tol_relative": "1",
+    "refinement.trial_lam": "1", "refinement.runs": "1", "refinement.runs_computed": "1",
+    "scan.lam": "1", "scan.starts": "1", "scan.seed": "1", "linear_programs": "1",
+    "lp_wall_time_s": "s", "safe_region_vertices": "m", "refinement.steps": "1",
+    "scan.class_counts": "1",
+    **{f"{b}_evidence.{k}": u for b in ("lambda3", "lambda4") for k, u in (
+        ("lam", "1"), ("dissipation_per_cycle", "J"), ("n_slipping", "1"),
+        ("memory_erased", "1"), ("cycles_run", "1"))},
+}
+
+#: every word of the categorical summary entries
+SUMMARY_FLAGS = {
+    "steady_state": ("shakedown", "cyclic_slip", "ratcheting", "not_converged",
+                     "inadmissible", "failed"),
+    "regime": ("below_lambda1", "between_lambda1_and_lambda2", "above_lambda2"),
+    "extreme_method": ("constant", "exact_single_harmonic", "breakpoints",
+                       "harmonic_refined", "sampled_refined"),
+}
 
 
 def add_parser(sub) -> None:
@@ -38,8 +66,9 @@ def add_parser(sub) -> None:
     p.add_argument("case", type=Path, help="TOML case file (model = \"discrete\")")
     p.add_argument("--out", type=Path, required=True, help="output directory")
     p.add_argument("--lam-max", type=float, default=None, help="largest λ simulated")
-    p.add_argument("--lam-points", type=int, default=21, help="λ values simulated")
-    p.add_argument("--starts", type=int, default=8, help="random initial slips per λ")
+    p.add_argument("--lam-points", type=count_option, default=21, help="λ values simulated")
+    p.add_argument("--starts", type=count_option, default=8,
+                   help="random initial slips per λ")
     p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--tol", type=float, default=1e-9, help="relative tolerance of λ1")
     p.add_argument("--lam-tol", type=float, default=1e-3,
@@ -113,6 +142,7 @@ def execute(args: argparse.Namespace) -> int:
         raise CaseError("--lam-tol", f"must be in (0, 1] (a fraction of lam_max), got "
                         f"{args.lam_tol}")
     n = dc.system.n_nodes
+    _check_sizes(args, n)
     t0 = time.perf_counter()
     region = safe_region(dc.system, dc.load)
     l2, v_last = lambda2(region)
@@ -196,6 +226,7 @@ def execute(args: argparse.Namespace) -> int:
                  "class_counts": {STEADY_CODES[c]: int((cls == c).sum())
                                   for c in np.unique(cls)}},
         "linear_programs": l1info["lps"] + 1, "lp_wall_time_s": t_lp,
+        "units": dict(SUMMARY_UNITS),
     }
     if n == 2:
         summary["safe_region_vertices"] = polygon_vertices(region, lam_case)
@@ -235,13 +266,30 @@ def execute(args: argparse.Namespace) -> int:
     if n == 2 and np.isfinite(l2):
         figures["safe_region_panels"] = lambda: plots.safe_region_panels(
             region, _panels(dc, region, l1, l2, lam_case, args.seed), l1, l2)
-    write_outputs(args.out, RunOutputs(summary=summary, dataset=ds, figures=figures),
+    write_outputs(args.out, RunOutputs(summary=summary, dataset=ds, figures=figures,
+                                       flags=dict(SUMMARY_FLAGS)),
                   case.text, case.path)
     print(json.dumps({k: summary[k] for k in ("lambda1", "lambda2", "lambda3_bracket",
                                               "lambda4_bracket", "regime")}, indent=2,
                      default=str))
     print(f"results written to {args.out}/")
     return 0
+
+
+def _check_sizes(args, n: int) -> None:
+    """Refuse a scan whose stored runs cannot be held in memory (before any work).
+
+    The scan holds ``--lam-points`` × (``--starts`` + 1) runs, the bisection at most
+    2 log2(1/``--lam-tol``) + 2 trial λ values of as many starts each.
+    """
+    from slipcycle.discrete.sizes import cells_bytes, check_memory
+
+    starts = args.starts + 1
+    check_memory("--starts", cells_bytes(starts, n) + 8.0 * starts * n * 8,
+                 f"{args.starts:g} random starts per λ ({n} nodes)")
+    trials = 2 * (np.log2(1.0 / args.lam_tol) + 2)
+    check_memory("--lam-points", cells_bytes((args.lam_points + trials) * starts, n),
+                 f"{args.lam_points:g} λ values × {starts:g} starts ({n} nodes)")
 
 
 def _label(s: int) -> str:
@@ -279,6 +327,10 @@ class _Trials:
         self.cells: dict[str, list] = {}
         self.computed = 0            # runs computed in this call (not from the checkpoint)
         self.progress = progress
+        # temporary checkpoints of an earlier call killed while saving (only this
+        # command writes .refine-*.json in its output directory)
+        for stale in path.parent.glob(".refine-*.json"):
+            stale.unlink(missing_ok=True)
         if resume and path.exists():
             try:
                 data = json.loads(path.read_text())

@@ -157,7 +157,7 @@ def load_discrete_case(case_text: str, case_path: str | None):
     base = parse_case_text(case_text, Path(case_path) if case_path else None)
     data = {k: v for k, v in base.data.items()
             if k in ("model", "title", "description", "discrete", "loading", "run")}
-    return read_discrete_case(Case(base.model, data, case_text, base.path))
+    return read_discrete_case(Case(base.model, data, case_text, base.path), record=False)
 
 
 def basin_row_task(params: dict, case_text: str, case_path, v1: tuple, v2: tuple,

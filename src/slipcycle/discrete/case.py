@@ -14,12 +14,17 @@ import xarray as xr
 
 from slipcycle.discrete.loads import DiscreteLoad, LoadCase
 from slipcycle.discrete.model import STATE_NAMES, FrictionalSystem, ModelError
-from slipcycle.discrete.steady import InadmissibleInitialState, initial_state, simulate
+from slipcycle.discrete.steady import (
+    STEADY_CLASSES,
+    InadmissibleInitialState,
+    initial_state,
+    simulate,
+)
 from slipcycle.discrete.wellposed import critical_friction
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.loading import HarmonicLoad, TabulatedLoad
 
-__all__ = ["run_case", "read_discrete_case", "DiscreteCase"]
+__all__ = ["run_case", "read_discrete_case", "DiscreteCase", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
 
 
 class DiscreteCase:
@@ -43,8 +48,13 @@ def _matrices(sec: Section) -> tuple[dict, dict]:
         path = sec.path("stiffness_file")
         order = sec.string("dof_order", "tangential_first",
                            choices=("tangential_first", "interleaved"))
-        from slipcycle.io.matrices import read_stiffness
+        from slipcycle.discrete.sizes import check_memory, system_bytes
+        from slipcycle.io.matrices import read_stiffness, stiffness_nodes
 
+        n_file = stiffness_nodes(path)
+        if n_file is not None:
+            check_memory(sec.key("stiffness_file"), system_bytes(n_file),
+                         f"{n_file} contact nodes")
         try:
             mats = read_stiffness(path, order)
         except (ValueError, OSError, KeyError) as exc:
@@ -113,8 +123,74 @@ def _time_function(sec: Section, lam: float):
     return HarmonicLoad([mean], amp[:, None], phase[:, None], lam)
 
 
-def read_discrete_case(case: Case) -> DiscreteCase:
+#: per-node keys whose length states the number of nodes the case was written for
+_PER_NODE_KEYS = (("discrete", "initial_slip"), ("discrete", "friction"), ("loading", "p0"),
+                  ("loading", "q0"), ("loading", "p1"), ("loading", "q1"))
+
+
+def _check_file_nodes(case: Case, sec: Section, n: int) -> None:
+    """Refuse a stiffness file whose node count disagrees with every per-node key.
+
+    When all the per-node lists of the case agree with each other but not with the file,
+    the file is the odd one out: say so (naming ``stiffness_file``), instead of blaming the
+    first per-node key read.
+    """
+    lengths = {}
+    for table, key in _PER_NODE_KEYS:
+        raw = case.data.get(table, {})
+        val = raw.get(key) if isinstance(raw, dict) else None
+        if isinstance(val, list) and val:
+            last = val[-1]
+            size = len(last) if isinstance(last, list) else len(val)
+            lengths[f"{table}.{key}"] = size
+    sizes = set(lengths.values())
+    if len(sizes) == 1 and n not in sizes:
+        m = sizes.pop()
+        keys = ", ".join(lengths)
+        raise sec.error("stiffness_file",
+                        f"the file holds a model of {n} contact nodes, but the case gives "
+                        f"{m} values per node ({keys}): use the stiffness file of the "
+                        f"{m}-node model, or give {n} values per node")
+
+
+def _initial_state_error(sec: Section, ld: Section, exc, r0: np.ndarray, n: int) -> CaseError:
+    """The key to blame for an initial state that is inadmissible at θ = 0.
+
+    A node that is open at θ = 0 because its normal load is tensile carries no friction
+    force, so the slip imposed on it cannot hold the tangential reaction: the load is at
+    fault (``loading.p0`` for a tensile mean), not ``initial_slip``.
+    """
+    j = exc.node
+    pw = float(r0[n + j])
+    if exc.separated and pw < 0:
+        raw = ld.data.get("p0")
+        p0 = np.broadcast_to(np.asarray(raw, float), (n,))[j] if raw is not None else pw
+        key = "p0" if p0 < 0 else ("p1" if ld.has("p1") else "p_table" if ld.has("p_table")
+                                   else "load_case")
+        return ld.error(key, f"node {j} is open at θ = 0: its normal load p^w = {pw:.6g} N "
+                             f"is tensile (p0 = {p0:.6g} N; compressive is positive), so it "
+                             "carries no friction force and cannot hold the slip that "
+                             "discrete.initial_slip imposes; make the normal load "
+                             "compressive, or remove initial_slip (the node then opens "
+                             "freely as the load is applied)")
+    return sec.error("initial_slip", f"inadmissible at θ = 0: {exc}")
+
+
+def _count(sec: Section, key: str, default: int, ge: int) -> int:
+    """An integer count; an integral float (``1e6``) is accepted, so that its size can be
+    judged (refused with the memory it needs) rather than its spelling."""
+    raw = sec.data.get(key, default)
+    if isinstance(raw, float) and raw.is_integer():
+        sec.data[key] = int(raw)
+    return sec.int(key, default, ge=ge)
+
+
+def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     """Read and validate every key of a discrete case; no computation beyond checks.
+
+    ``record``: the histories of every cycle will be kept (``slipcycle run``); their
+    memory is then part of the size check. Many-run analyses (shakedown, basins) keep
+    only numbers per run and pass ``False``.
 
     Raises
     ------
@@ -124,6 +200,8 @@ def read_discrete_case(case: Case) -> DiscreteCase:
     sec = case.section("discrete")
     mats, mkeys = _matrices(sec)
     n = np.asarray(mats["A"]).shape[0] if np.ndim(mats["A"]) == 2 else 0
+    if sec.has("stiffness_file"):
+        _check_file_nodes(case, sec, n)
     friction = sec.array("friction", shape=(n,), ge=0.0, scalar_ok=True)
     accept = sec.bool("accept_ill_posed", False)
     exact_max = sec.int("f_crit_exact_max_nodes", 10, ge=0, le=14)
@@ -169,12 +247,24 @@ def read_discrete_case(case: Case) -> DiscreteCase:
 
     rn = case.section("run", required=False)
     run = {
-        "cycles": rn.int("cycles", 40, ge=1, le=100000),
-        "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1, le=10_000_000),
+        "cycles": _count(rn, "cycles", 40, ge=1),
+        "steps_per_cycle": _count(rn, "steps_per_cycle", 100, ge=1),
         "tol": rn.float("tolerance", 1e-8, gt=0.0, lt=1.0),
         "min_cycles": rn.int("min_cycles", 1, ge=1),
     }
     case.finish()
+
+    # -- sizes: refuse what cannot be allocated, before any work --------------------------
+    from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
+
+    check_memory(sec.key("A") if not sec.has("stiffness_file") else
+                 sec.key("stiffness_file"), system_bytes(n), f"{n} contact nodes")
+    steps, cyc = run["steps_per_cycle"], run["cycles"]
+    # blame the key the user set (both appear in the message)
+    key = "cycles" if rn.has("cycles") and not rn.has("steps_per_cycle") else "steps_per_cycle"
+    check_memory(rn.key(key), run_bytes(n, steps, cyc, record),
+                 f"{steps:g} steps per cycle × up to {cyc:g} cycles "
+                 f"({n} nodes{', every cycle recorded' if record else ''})")
 
     # -- model checks (no solving yet) ---------------------------------------------------
     try:
@@ -197,7 +287,7 @@ def read_discrete_case(case: Case) -> DiscreteCase:
         try:
             initial_state(system, r0, init, 1e-10 * F)
         except InadmissibleInitialState as exc:
-            raise CaseError(sec.key("initial_slip"), f"inadmissible at θ = 0: {exc}") from None
+            raise _initial_state_error(sec, ld, exc, r0, n) from None
     return DiscreteCase(system, load, fc, run, init, protocol)
 
 
@@ -208,6 +298,8 @@ def _dataset(dc: DiscreteCase, res) -> xr.Dataset:
     loads[-1] = loads[0]
     cyc = np.arange(1, res.cycles_run + 1)
     dims = ("cycle", "theta", "node")
+    stuck = np.zeros(n, np.int8)
+    stuck[res.permanently_stuck_nodes] = 1
     ds = xr.Dataset(
         {
             "slip": (dims, res.x[:, :, :n], {"units": "m", "long_name": "tangential slip v"}),
@@ -234,6 +326,12 @@ def _dataset(dc: DiscreteCase, res) -> xr.Dataset:
                                     {"units": "J", "long_name": "total D of each cycle"}),
             "events": (("cycle",), np.array(res.events_per_cycle),
                        {"units": "1", "long_name": "events located in each cycle"}),
+            "slip_length": (("node",), np.asarray(res.slip_length), {
+                "units": "m", "long_name": "∫|dv_j| over the last cycle"}),
+            "permanently_stuck": (("node",), stuck, {
+                "units": "1", "long_name": "node stuck over the whole last cycle (slip "
+                "length <= slip_tolerance)", "flag_values": np.array([0, 1], np.int8),
+                "flag_meanings": "slips_or_separates permanently_stuck"}),
         },
         coords={
             "cycle": ("cycle", cyc, {"units": "1"}),
@@ -241,7 +339,28 @@ def _dataset(dc: DiscreteCase, res) -> xr.Dataset:
             "node": ("node", np.arange(n), {"units": "1"}),
         },
     )
+    ds.attrs["slip_tolerance"] = float(res.slip_tolerance)
+    ds.attrs["slip_tolerance_units"] = "m"
+    ds.attrs["node_numbering"] = "from 0 (node j is row j of A, B, C)"
     return ds
+
+
+#: unit of every numeric summary entry (node indices, counts, flags and ratios: "1")
+SUMMARY_UNITS = {
+    "n_nodes": "1", "converged": "1", "residual": "1", "cycles_run": "1",
+    "dissipation_per_cycle": "J", "dissipation_per_node": "J",
+    "work_of_loads_per_cycle": "J", "energy_balance_error": "1", "slipping_nodes": "1",
+    "permanently_stuck_nodes": "1", "separating_nodes": "1", "separation": "1",
+    "ratchet_per_cycle": "m", "memory_erased": "1", "f_crit": "1",
+    "f_crit_lower_bound": "1", "friction_max": "1", "well_posed": "1", "events_total": "1",
+    "events_last_cycle": "1", "wall_time_s": "s",
+}
+
+#: every word of the categorical summary entries (position = code in sweep stores)
+SUMMARY_FLAGS = {
+    "steady_state": STEADY_CLASSES,
+    "f_crit_method": ("exact", "bound"),
+}
 
 
 def summarize(dc: DiscreteCase, res, wall: float) -> dict:
@@ -273,6 +392,7 @@ def summarize(dc: DiscreteCase, res, wall: float) -> dict:
         "events_total": int(sum(res.events_per_cycle)),
         "events_last_cycle": int(res.events_per_cycle[-1]),
         "wall_time_s": wall,
+        "units": dict(SUMMARY_UNITS),
     }
 
 
@@ -293,4 +413,5 @@ def run_case(case: Case) -> RunOutputs:
     }
     if dc.system.n_nodes == 2:
         figures["v_space"] = lambda: plots.v_space(dc.system, dc.load, res)
-    return RunOutputs(summary=summary, dataset=ds, figures=figures)
+    return RunOutputs(summary=summary, dataset=ds, figures=figures,
+                      flags=dict(SUMMARY_FLAGS))

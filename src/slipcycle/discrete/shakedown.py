@@ -63,12 +63,13 @@ def constraint_names(n: int) -> list[str]:
     """Labels of the 2N constraints in the order of :class:`SafeRegion` rows.
 
     Row 2j is (node j, s = +1): q_j ≥ −f p_j (positive slip); row 2j+1 is (node j, s = −1):
-    q_j ≤ f p_j (negative slip). For N = 2 these are seed 001 eq. 3 II, I, IV, III.
+    q_j ≤ f p_j (negative slip). For N = 2 these are Barber's II, I, IV, III. Nodes are
+    numbered from 0, as in every summary, Dataset and figure.
     """
     if n == 2:
-        return ["II (node 1, q=−fp)", "I (node 1, q=+fp)", "IV (node 2, q=−fp)",
-                "III (node 2, q=+fp)"]
-    return [f"node {j + 1} {'q=−fp' if s > 0 else 'q=+fp'}" for j in range(n) for s in (1, -1)]
+        return ["II (node 0, q=−fp)", "I (node 0, q=+fp)", "IV (node 1, q=−fp)",
+                "III (node 1, q=+fp)"]
+    return [f"node {j} {'q=−fp' if s > 0 else 'q=+fp'}" for j in range(n) for s in (1, -1)]
 
 
 @dataclass(frozen=True)

@@ -34,9 +34,11 @@ STEADY_CLASSES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged")
 class InadmissibleInitialState(ValueError):
     """The initial slip violates a friction or contact inequality at θ = 0."""
 
-    def __init__(self, node: int, margin: float, what: str):
+    def __init__(self, node: int, margin: float, what: str, separated: bool = False):
         self.node = node
         self.margin = margin
+        #: the node is open (w > 0) at θ = 0, so it cannot carry the tangential reaction
+        self.separated = separated
         super().__init__(f"node {node} {what} (margin {margin:.6g} N)")
 
 
@@ -68,6 +70,11 @@ class SteadyResult:
     events_per_cycle : list of int
     ratchet_per_cycle : (N,) array
         Slip increment per cycle v_c − v_{c−1} of the last cycle [m].
+    slip_length : (N,) array
+        ∫|v̇_j| dθ over the last cycle [m].
+    slip_tolerance : float
+        Slip length [m] at or below which a node counts as stuck in the last cycle:
+        max(100 tol, 1e-9) × the displacement scale (round-off, not slip).
     """
 
     steady_state: str
@@ -92,6 +99,8 @@ class SteadyResult:
     initial_state: np.ndarray | None = None
     stored_energy_change: float = 0.0
     force_scale: float = 1.0
+    slip_length: np.ndarray | None = None
+    slip_tolerance: float = 0.0
 
     @property
     def dissipation_per_cycle(self) -> float:
@@ -142,7 +151,7 @@ def initial_state(system: FrictionalSystem, r_w: np.ndarray, v0: np.ndarray,
                 f"{q[j]:.6g} N") if w[j] > 0 else (
             f"violates the friction inequality |q| ≤ f p at θ = 0: q = {q[j]:.6g} N, "
             f"f p = {system.friction[j] * p[j]:.6g} N")
-        raise InadmissibleInitialState(j, float(margin[j]), what)
+        raise InadmissibleInitialState(j, float(margin[j]), what, bool(w[j] > 0))
     return x
 
 
@@ -260,5 +269,5 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         ratchet_per_cycle=ratchet, all_slip_or_separated=totals.all_slip_or_separated,
         disp_scale=disp_scale, solver_stats=dict(evo.solver.stats),
         dissipation_history=diss_hist, initial_state=x_init, stored_energy_change=d_stored,
-        force_scale=F)
+        force_scale=F, slip_length=totals.slip_length.copy(), slip_tolerance=slip_tol)
 

@@ -169,18 +169,24 @@ class ReducedModel:
             "tangent": self.tangent, "dof_order": np.array("tangential_first"),
         }
 
-    def save(self, path: str | Path, metadata: dict | None = None) -> Path:
+    def save(self, path: str | Path, metadata: dict | None = None, *,
+             atomic: bool = True) -> Path:
         """Write an ``.npz`` atomically (temporary name, then ``os.replace``).
 
         ``metadata`` (e.g. :func:`slipcycle.io.results.provenance`) and :attr:`info` are
-        stored as a JSON string in the array ``metadata``.
+        stored as a JSON string in the array ``metadata``. ``atomic=False`` writes ``path``
+        directly (a caller staging several files together does the renaming).
         """
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         meta = dict(metadata or {})
         meta["model_info"] = self.info
         arrays = self.arrays()
         arrays["metadata"] = np.array(json.dumps(meta, default=_json_default))
+        if not atomic:
+            with open(path, "wb") as fh:
+                np.savez_compressed(fh, **arrays)
+            return path
+        path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial.npz",
                                    dir=path.parent)
         os.close(fd)

@@ -17,12 +17,13 @@ q = q^w + A v + Bᵀ w, p = p^w + B v + C w.
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["read_stiffness", "split_stiffness", "check_stiffness", "mtx_dof_order",
-           "StiffnessError", "DOF_ORDERS"]
+__all__ = ["read_stiffness", "stiffness_nodes", "split_stiffness", "check_stiffness",
+           "mtx_dof_order", "StiffnessError", "DOF_ORDERS"]
 
 DOF_ORDERS = ("tangential_first", "interleaved")
 
@@ -159,6 +160,56 @@ def _split_checked(K, order: str, check: bool, rtol: float) -> dict:
     return split_stiffness(K, order)
 
 
+def _read_npz(path: Path) -> dict:
+    """The arrays of an ``.npz`` file, never unpickling anything.
+
+    A file that is not a zip of ``.npy`` arrays, or holds object (pickled) arrays, is refused
+    as "not a valid .npz of A, B, C" rather than with NumPy's advice to allow pickles.
+    """
+    what = ("not a valid .npz of arrays A, B, C (or K): an .npz file is a zip of numeric "
+            ".npy arrays, as written by numpy.savez")
+    try:
+        data = np.load(path, allow_pickle=False)
+    except (ValueError, EOFError, zipfile.BadZipFile):
+        raise ValueError(what) from None
+    if not isinstance(data, np.lib.npyio.NpzFile):     # a plain .npy renamed to .npz
+        raise ValueError(what)
+    try:
+        with data:
+            return {k: np.asarray(data[k]) for k in data.files}
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile, KeyError):
+        # object arrays (pickles) and damaged members
+        raise ValueError(what + " (a member is damaged or is not a numeric array)") from None
+
+
+def stiffness_nodes(path: str | Path) -> int | None:
+    """The number of contact nodes N of a stiffness file, read from its headers only.
+
+    ``.npz``: the shape in the ``.npy`` header of ``A`` (N×N) or ``K`` (2N×2N); ``.mtx``:
+    the size line (2N×2N). Nothing else is loaded, so a size check can run before a huge
+    file is read. ``None`` when the headers cannot tell (the reader then reports why).
+    """
+    path = Path(path)
+    try:
+        if path.suffix.lower() == ".mtx":
+            from scipy.io import mminfo
+
+            rows = int(mminfo(str(path))[0])
+            return rows // 2
+        with zipfile.ZipFile(path) as zf:
+            for name, div in (("A.npy", 1), ("K.npy", 2)):
+                if name in zf.namelist():
+                    with zf.open(name) as fh:
+                        version = np.lib.format.read_magic(fh)
+                        read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                                else np.lib.format.read_array_header_2_0)
+                        shape = read(fh)[0]
+                    return int(shape[0]) // div if shape else None
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError, IndexError, TypeError):
+        return None
+    return None
+
+
 def read_stiffness(path: str | Path, dof_order: str | None = None, *, check: bool = True,
                    rtol: float = 1e-6) -> dict:
     """Read A, B, C (and any load vectors, coordinates) from ``.npz`` or ``.mtx``.
@@ -186,8 +237,7 @@ def read_stiffness(path: str | Path, dof_order: str | None = None, *, check: boo
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".npz":
-        with np.load(path, allow_pickle=False) as data:
-            out = {k: np.asarray(data[k]) for k in data.files}
+        out = _read_npz(path)
         if "K" in out and "A" not in out:
             stated = str(out["dof_order"]) if "dof_order" in out else None
             order = _resolve_order(stated, dof_order, path.name)

@@ -1,11 +1,14 @@
-"""Figures of the shakedown analysis (seed 001 Figs. 1–3; SPEC §2).
+"""Figures of the shakedown analysis (after Barber's Figs. 1–3; Ahn, Bertocchi & Barber 2008).
 
 - :func:`safe_region_panels`: N = 2, one panel per load factor: the four constraints
-  I–IV at their extreme positions, the safe region S(λ) shaded, trajectories in (v1, v2)
+  I–IV at their extreme positions, the safe region S(λ) shaded, trajectories in (v₀, v₁)
   from several starts ending in shakedown (green) or a cyclic-slip orbit (red);
 - :func:`dissipation_vs_lambda`: any N, steady dissipation per cycle against λ for every
   start, with λ1, λ2 and the λ3, λ4 brackets marked;
-- :func:`basin_map`: N = 2, steady class and dissipation over the initial slip (v1, v2).
+- :func:`basin_map`: N = 2, steady class and dissipation over the initial slip
+  (v₀, v₁), non-converged starts marked.
+
+Nodes are numbered from 0, as in the summaries and Datasets.
 
 Builds on :mod:`slipcycle.plot.discrete` (constraint labels, the single-run v-space
 picture). Each function returns a matplotlib Figure.
@@ -27,10 +30,12 @@ CLASS_NAMES = ["shakedown", "cyclic slip", "ratcheting", "not converged", "inadm
                "failed"]
 
 
-def _draw_constraints(ax, region, lam, lo, hi, names):
+def _draw_constraints(ax, region, lam, lo, hi, names, f=1.0):
+    """Constraint lines and S(λ) in axes whose slips are in units of ``f`` metres."""
     from slipcycle.discrete.shakedown import polygon_vertices
 
-    G, h = region.G, region.h(lam)
+    G, h = region.G, region.h(lam) / f
+    lo, hi = np.asarray(lo) / f, np.asarray(hi) / f
     xs = np.linspace(lo[0], hi[0], 2)
     for k in range(G.shape[0]):
         g = G[k]
@@ -38,9 +43,9 @@ def _draw_constraints(ax, region, lam, lo, hi, names):
             ax.plot(xs, (h[k] - g[0] * xs) / g[1], lw=1, label=names[k] + "$^E$")
         else:
             ax.axvline(h[k] / g[0], lw=1, label=names[k] + "$^E$")
-    P = polygon_vertices(region, lam)
+    P = polygon_vertices(region, lam) / f
     if len(P) >= 3:
-        ax.fill(P[:, 0], P[:, 1], color="#cfe8cf", zorder=0, label="safe region S(λ)")
+        ax.fill(P[:, 0], P[:, 1], color="#a5d6a7", zorder=0, label="safe region S(λ)")
     return P
 
 
@@ -58,7 +63,7 @@ def safe_region_panels(region, panels: list[dict], lam1: float, lam2: float) -> 
     k = len(panels)
     fig = Figure(figsize=(5.0 * k, 4.8))
     axes = np.atleast_1d(fig.subplots(1, k, squeeze=False)).ravel()
-    # the constraint labels of the single-run picture (seed eq. 3 I–IV)
+    # the constraint labels of the single-run picture (Barber's I–IV)
     names = _constraint_names(region.n_nodes)
     for ax, pan in zip(axes, panels, strict=True):
         lam = pan["lam"]
@@ -72,10 +77,12 @@ def safe_region_panels(region, panels: list[dict], lam1: float, lam2: float) -> 
         lo, hi = allv.min(axis=0), allv.max(axis=0)
         span = np.maximum(hi - lo, 1e-12)
         lo, hi = lo - 0.25 * span, hi + 0.25 * span
-        _draw_constraints(ax, region, lam, lo, hi, names)
+        f, unit = _discrete.scaled_unit(np.concatenate([lo, hi]), "m")
+        _draw_constraints(ax, region, lam, lo, hi, names, f)
         for v, cls in pan["trajectories"]:
             col = CLASS_COLORS[0] if cls == "shakedown" else (
                 CLASS_COLORS[1] if cls == "cyclic_slip" else CLASS_COLORS[3])
+            v = v / f
             ax.plot(v[:, 0], v[:, 1], "-", color=col, lw=0.9)
             ax.plot(v[0, 0], v[0, 1], "o", color=col, ms=4)
             ax.plot(v[-1, 0], v[-1, 1], "s", color="k", ms=3)
@@ -83,10 +90,11 @@ def safe_region_panels(region, panels: list[dict], lam1: float, lam2: float) -> 
                   "λ1 < λ < λ2: depends on the start" if lam < lam2 else
                   "λ > λ2: no shakedown")
         ax.set_title(f"λ = {lam:.4g}  ({regime})", fontsize=9)
-        ax.set_xlim(lo[0], hi[0])
-        ax.set_ylim(lo[1], hi[1])
-        ax.set_xlabel("v₁ [m]")
-        ax.set_ylabel("v₂ [m]")
+        ax.set_xlim(lo[0] / f, hi[0] / f)
+        ax.set_ylim(lo[1] / f, hi[1] / f)
+        ax.set_xlabel(f"v₀ (node 0) [{unit}]")
+        ax.set_ylabel(f"v₁ (node 1) [{unit}]")
+        _discrete._plain(ax)
     axes[0].plot([], [], "-", color=CLASS_COLORS[0], label="→ shakedown")
     axes[0].plot([], [], "-", color=CLASS_COLORS[1], label="→ cyclic slip")
     axes[0].legend(fontsize=6, loc="best")
@@ -121,6 +129,10 @@ def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4, refined
     """
     fig = Figure(figsize=(7, 4.5))
     ax = fig.subplots()
+    fd, ud = _discrete.scaled_unit(dissipation, "J")
+    dissipation = np.asarray(dissipation) / fd
+    if trials is not None:
+        trials = (trials[0], np.asarray(trials[1]) / fd, trials[2])
     L, S = dissipation.shape
     for code in np.unique(classes):
         sel = classes == code
@@ -151,7 +163,8 @@ def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4, refined
                        label=f"{name} ∈ [{lo:.5g}, {hi:.5g}]")
             ax.text(hi, y * ymax, f" {name}", color=col, ha="left", va="top", fontsize=9)
     ax.set_xlabel("load factor λ")
-    ax.set_ylabel("dissipation per cycle [J]")
+    ax.set_ylabel(f"dissipation per cycle [{ud}]")
+    _discrete._plain(ax)
     ax.legend(fontsize=7)
     ax.set_title("steady dissipation from many initial conditions")
     fig.tight_layout()
@@ -161,43 +174,65 @@ def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4, refined
 def basin_map(v1, v2, classes, dissipation, region=None, lam=None) -> Figure:
     """N = 2 basin map over initial slip states at θ = 0.
 
+    Starts that did not reach a steady state within ``run.cycles`` (class
+    ``not_converged``) have their own colour and legend entry (with their count, listed
+    even when 0), and are hatched on the dissipation map, whose value for them is only
+    that of the last cycle run.
+
     Parameters
     ----------
     v1 : (n1,) array, v2 : (n2,) array
-        Grid of initial slips [m].
+        Grid of initial slips [m] of nodes 0 and 1 (numbered from 0 like the summary).
     classes : (n2, n1) int array
         Class codes (rows: v2).
     dissipation : (n2, n1) array [J]
     region : SafeRegion, optional
         Drawn at ``lam`` on top (the safe region S(λ)).
     """
-    fig = Figure(figsize=(11, 4.8))
+    from matplotlib.patches import Patch
+
+    nc = CLASS_NAMES.index("not converged")
+    fig = Figure(figsize=(11.5, 4.9))
     ax1, ax2 = fig.subplots(1, 2)
+    f, unit = _discrete.scaled_unit(np.r_[v1[[0, -1]], v2[[0, -1]]], "m")
     cmap = ListedColormap(CLASS_COLORS)
     norm = BoundaryNorm(np.arange(-0.5, len(CLASS_COLORS) + 0.5), cmap.N)
-    ext = [v1[0], v1[-1], v2[0], v2[-1]]
+    ext = [v1[0] / f, v1[-1] / f, v2[0] / f, v2[-1] / f]
     ax1.imshow(classes, origin="lower", extent=ext, cmap=cmap, norm=norm, aspect="auto",
                interpolation="nearest")
-    for code in np.unique(classes):
-        ax1.plot([], [], "s", color=CLASS_COLORS[int(code)], label=CLASS_NAMES[int(code)])
-    ax1.legend(fontsize=7, loc="best")
-    ax1.set_title("steady state")
-    D = np.ma.masked_invalid(dissipation)
+    shown = sorted(set(np.unique(classes).tolist()) | {nc})
+    handles = [Patch(color=CLASS_COLORS[int(c)],
+                     label=f"{CLASS_NAMES[int(c)]} ({int((classes == c).sum())})")
+               for c in shown]
+    ax1.set_title("steady state (count of starts)")
+    fd, ud = _discrete.scaled_unit(dissipation[np.isfinite(dissipation)], "J")
+    D = np.ma.masked_invalid(np.asarray(dissipation, float) / fd)
     im = ax2.imshow(D, origin="lower", extent=ext, aspect="auto", interpolation="nearest",
                     cmap="viridis")
-    fig.colorbar(im, ax=ax2, label="dissipation per cycle [J]")
+    fig.colorbar(im, ax=ax2, label=f"dissipation per cycle [{ud}]")
     ax2.set_title("steady dissipation")
+    bad = classes == nc
+    if bad.any():
+        X, Y = np.meshgrid(np.asarray(v1) / f, np.asarray(v2) / f)
+        for ax in (ax1, ax2):
+            ax.contourf(X, Y, bad.astype(float), levels=[0.5, 1.5], colors="none",
+                        hatches=["xxx"])
+        handles.append(Patch(facecolor="none", hatch="xxx", edgecolor="k",
+                             label="not converged (D of the last cycle run)"))
     if region is not None and lam is not None:
         from slipcycle.discrete.shakedown import polygon_vertices
 
-        P = polygon_vertices(region, lam)
+        P = polygon_vertices(region, lam) / f
         if len(P) >= 3:
             for ax in (ax1, ax2):
                 ax.fill(np.r_[P[:, 0], P[0, 0]], np.r_[P[:, 1], P[0, 1]], fill=False,
-                        ec="k", lw=1.2, label="S(λ)")
+                        ec="k", lw=1.2)
+            handles.append(Patch(facecolor="none", edgecolor="k", label="S(λ)"))
+    ax1.legend(handles=handles, fontsize=7, loc="lower left")
     for ax in (ax1, ax2):
-        ax.set_xlabel("initial v₁ [m]")
-        ax.set_ylabel("initial v₂ [m]")
+        ax.set_xlabel(f"initial v₀ (node 0) [{unit}]")
+        ax.set_ylabel(f"initial v₁ (node 1) [{unit}]")
+        _discrete._plain(ax)
     fig.tight_layout()
     return fig
 

@@ -1,0 +1,88 @@
+"""Memory estimates of discrete analyses, checked before any work.
+
+Sizes that validation accepts (a count of load steps, of λ values, of starts, of grid
+points, or the node count of a stiffness file) but that cannot be allocated are refused up
+front, naming the key or option, with the estimated memory. The estimates are upper
+bounds of the dominant arrays (float64 = 8 bytes), not measurements; they only have to be
+right to within a small factor to tell a feasible size from one that would exhaust memory.
+"""
+
+from __future__ import annotations
+
+from slipcycle.io import CaseError
+
+__all__ = ["MEMORY_LIMIT", "check_memory", "format_bytes", "run_bytes", "system_bytes",
+           "cells_bytes", "count_option"]
+
+#: largest estimated memory of one analysis [bytes] (4 GB)
+MEMORY_LIMIT = 4.0e9
+
+#: bytes per node and load sample of a recorded run: x, r (2N float64 each) in the result
+#: and again in the Dataset, friction limit, node modes (int8, twice)
+_RECORD_BYTES_PER_NODE_SAMPLE = 8 * (2 + 2) * 2 + 8 + 2
+
+#: bytes per stored cell of a sweep-like analysis besides its per-node arrays: the Python
+#: record in the main process, the Zarr chunk buffers and the Dataset copy
+_CELL_BYTES = 2048
+
+
+def format_bytes(nbytes: float) -> str:
+    """``nbytes`` as a short decimal size ("80 GB", "512 MB")."""
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if nbytes >= size:
+            return f"{nbytes / size:.3g} {unit}"
+    return f"{nbytes:.0f} B"
+
+
+def check_memory(key: str, nbytes: float, what: str, limit: float = MEMORY_LIMIT) -> None:
+    """Refuse a size whose estimated memory exceeds ``limit``.
+
+    Raises
+    ------
+    CaseError
+        ``key: <what> need about <size> of memory (limit 4 GB)``.
+    """
+    if nbytes > limit:
+        raise CaseError(key, f"{what} need about {format_bytes(nbytes)} of memory (limit "
+                             f"{format_bytes(limit)})")
+
+
+def system_bytes(n_nodes: int) -> float:
+    """Dense matrices of an N-node system: A, B, C, K = [[A, Bᵀ], [B, C]] (4N²), its
+    Cholesky factor and eigenvalue work, the rate-problem inverses [bytes]."""
+    return 8.0 * n_nodes**2 * (3 + 4 * 4)
+
+
+def run_bytes(n_nodes: int, steps_per_cycle: int, cycles: int, record: bool = True) -> float:
+    """One steady-state run: the load samples of a cycle ((steps + 1, 2N) several times)
+    and, when the histories are recorded (``slipcycle run``), every cycle's samples."""
+    samples = float(steps_per_cycle + 1)
+    out = 8.0 * samples * (2 * n_nodes + 1) * 4
+    out += 8.0 * (cycles + 1) * 2 * n_nodes * 2     # start-of-cycle states, histories
+    if record:
+        out += float(cycles) * samples * n_nodes * _RECORD_BYTES_PER_NODE_SAMPLE
+    return out
+
+
+def cells_bytes(cells: float, n_nodes: int) -> float:
+    """Stored results of ``cells`` runs (dissipation per node and initial slip: 2N floats
+    each, plus the fixed cost of a cell) [bytes]."""
+    return float(cells) * (_CELL_BYTES + 16.0 * n_nodes)
+
+
+def count_option(text: str) -> int:
+    """argparse ``type`` of a count option: an integer, also written as an integral float
+    (``1e6``), so that a huge value is judged by its memory rather than its spelling."""
+    import argparse
+
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        val = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+    if not val.is_integer():
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}")
+    return int(val)
