@@ -276,7 +276,7 @@ def _typo_of(key: str, present) -> str | None:
     """The key in ``present`` that looks like a misspelling of ``key``, if any."""
     import difflib
 
-    close = difflib.get_close_matches(key, list(present), n=1, cutoff=0.75)
+    close = difflib.get_close_matches(key, list(present), n=1, cutoff=0.65)
     if close:
         return close[0]
     lowered = {k.lower(): k for k in present if isinstance(k, str)}

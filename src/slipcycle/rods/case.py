@@ -1,11 +1,12 @@
-"""Case file → two-rod analysis → results (``model = "rods"``, SPEC §5, §6).
+"""Case file → two-rod analysis → results (``model = "rods"``; docs/rods.md).
 
 Keys of ``[rods]``: L, radius, E, nu, density (two values each: rod 1 clamped, rod 2
 driven), friction, axial_force (F0, N; may also sit in [loading]), interface (welded |
 distributed | coulomb | jenkins | iwan), interface_stiffness (k_t, N/m³), damping_ratio (ζ,
-default 0.01), modes (per rod, default 50), rings (default 100; also the number of Iwan
-elements), static_correction (default true), iwan_chi / iwan_beta (optional: Segalman
-parameters instead of the fit).
+default 0.01), modes (per rod, default 50), rings (default 100), static_correction (default
+true), iwan_chi / iwan_beta (optional: Segalman's χ ∈ (−1, 2] and β ≥ 0 instead of the fit;
+the Iwan element's count of Jenkins elements is set by its accuracy target, see
+:func:`slipcycle.rods.interfaces.segalman_density`).
 Keys of ``[loading]``: rotation_amplitude (Θ_a, rad), frequency_ratio (Ω/ω1) or frequency
 (Ω, rad/s), axial_amplitude (F_a, N, default 0), axial_phase (ψ, rad, default 0).
 Keys of ``[run]``: steps_per_cycle (default 400), cycles (maximum, default 300), steady_tol
@@ -19,10 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from slipcycle.io import Case, RunOutputs, Section
+from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.rods.model import INTERFACES, Excitation, Rod, TwoRods
 
-__all__ = ["RodsCase", "parse_case", "run_case", "analyse"]
+__all__ = ["RodsCase", "parse_case", "run_case", "analyse", "interface_bed", "RUN_UNITS",
+           "RUN_FLAGS", "MEMORY_LIMIT"]
+
+#: largest estimated memory of one analysis [bytes]
+MEMORY_LIMIT = 4.0e9
 
 
 @dataclass
@@ -43,15 +48,35 @@ class RodsCase:
     iwan_beta: float | None = None
 
 
-def _either(sec: Section, other: Section, key: str, default, **bounds) -> float:
+def _either(sec: Section, other: Section, key: str, default, **bounds) -> tuple[float, Section]:
+    """A key that may sit in either table; returns (value, the table it was read from)."""
     if sec.has(key) and other.has(key):
         raise sec.error(key, f"given in both [{sec.prefix}] and [{other.prefix}]; keep one")
     where = other if other.has(key) else sec
-    return where.float(key, default, **bounds)
+    return where.float(key, default, **bounds), where
 
 
-def parse_case(case: Case, *, finish: bool = True) -> RodsCase:
-    """Validate a rods case completely (raises CaseError naming the key)."""
+def _run_bytes(modes: int, steps: int, rings: int) -> float:
+    """Upper bound of one steady-state run's memory [bytes]: the periodic projection keeps
+    dense (4m × 4m) monodromies of the 2m modes (the matrix, its K-th power, an LU and a few
+    cached LUs), plus per-step histories and per-element states."""
+    m4 = 4.0 * modes
+    return 8.0 * (6.0 * m4 * m4 + 40.0 * steps + 8.0 * rings)
+
+
+def _format_bytes(nbytes: float) -> str:
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if nbytes >= size:
+            return f"{nbytes / size:.3g} {unit}"
+    return f"{nbytes:.0f} B"
+
+
+def parse_case(case: Case, *, finish: bool = True, limits: bool = False) -> RodsCase:
+    """Validate a rods case completely (raises CaseError naming the key).
+
+    ``limits=False`` (``slipcycle run``, sweeps) accepts a ``[limits]`` table unread;
+    ``limits=True`` leaves it to :func:`slipcycle.rods.limits.parse_limits`.
+    """
     from slipcycle.rods.welded import omega1
 
     sec = case.section("rods")
@@ -71,20 +96,22 @@ def parse_case(case: Case, *, finish: bool = True) -> RodsCase:
     modes = sec.int("modes", 50, ge=1, le=2000)
     rings = sec.int("rings", 100, ge=2, le=100000)
     static_corr = sec.bool("static_correction", True)
-    chi = sec.float("iwan_chi", None, gt=-1.0, le=5.0)
+    chi = sec.float("iwan_chi", None, gt=-1.0, le=2.0)
     beta = sec.float("iwan_beta", None, ge=0.0)
     if (chi is None) != (beta is None):
         raise sec.error("iwan_beta" if beta is None else "iwan_chi",
                         "give both iwan_chi and iwan_beta, or neither (then they are fitted)")
     if chi is not None and iface != "iwan":
-        raise sec.error("iwan_chi", "only used with interface = 'iwan'")
-    F0 = _either(sec, load, "axial_force", None, ge=0.0)
+        raise sec.error("iwan_chi", f"only used with interface = 'iwan' (interface = "
+                        f"{iface!r}); remove iwan_chi and iwan_beta")
+    F0, f0_sec = _either(sec, load, "axial_force", None, ge=0.0)
     if F0 is None:
         raise sec.error("axial_force", "required key is missing (mean compressive force F0, N)")
     if F0 <= 0.0 and iface != "welded":
-        raise sec.error("axial_force", f"must be > 0 for a frictional interface, got {F0:g}")
-    Fa = _either(sec, load, "axial_amplitude", 0.0, ge=0.0)
-    psi = _either(sec, load, "axial_phase", 0.0)
+        raise f0_sec.error("axial_force", f"must be > 0 for a frictional interface "
+                           f"(interface = {iface!r}), got {F0:g}")
+    Fa = _either(sec, load, "axial_amplitude", 0.0, ge=0.0)[0]
+    psi = _either(sec, load, "axial_phase", 0.0)[0]
     amp = load.float("rotation_amplitude", gt=0.0)
     has_r, has_w = load.has("frequency_ratio"), load.has("frequency")
     if has_r == has_w:
@@ -97,8 +124,14 @@ def parse_case(case: Case, *, finish: bool = True) -> RodsCase:
     tol = run.float("steady_tol", 1e-6, gt=0.0, lt=1.0)
     reg = run.bool("regularisation", True)
     reg_pts = run.int("regularisation_points", 25, ge=8, le=400)
-    if "limits" in case.data:  # read by `slipcycle limits`; ignored by `slipcycle run`
-        case.section("limits").data.clear()
+    if "limits" in case.data and not limits:  # read by `slipcycle limits` only
+        case.section("limits").ignore()
+    need = _run_bytes(modes, K, rings)
+    if need > MEMORY_LIMIT:
+        key = sec.key("modes") if 6.0 * (4.0 * modes) ** 2 * 8 > 0.5 * need else \
+            run.key("steps_per_cycle")
+        raise CaseError(key, f"{modes} modes per rod and {K} steps per cycle need about "
+                        f"{_format_bytes(need)} of memory (limit {_format_bytes(MEMORY_LIMIT)})")
     if finish:
         case.finish()
     try:
@@ -115,13 +148,49 @@ def parse_case(case: Case, *, finish: bool = True) -> RodsCase:
     else:
         W = ratio * w1
     exc = Excitation(amp, W, F0, Fa, psi)
+    if iface == "welded" and zeta == 0.0 and not limits:  # `limits` marks poles instead
+        _refuse_pole(rods, W, w1, load, "frequency_ratio" if has_r else "frequency")
     return RodsCase(rods, exc, ratio, w1, modes, rings, static_corr, K, cycles, tol, reg,
                     reg_pts, chi, beta)
 
 
+def _refuse_pole(rods: TwoRods, W: float, w1: float, load: Section, key: str) -> None:
+    """A welded, undamped system driven at a natural frequency has no steady state."""
+    from slipcycle.rods.limits import POLE_RTOL
+    from slipcycle.rods.welded import natural_frequencies
+
+    n = int(W / w1 * 1.05) + 2
+    poles = natural_frequencies(rods.with_(interface="welded"), n)
+    hit = np.abs(W / poles - 1.0) <= POLE_RTOL
+    if np.any(hit):
+        r = float(poles[hit][0] / w1)
+        raise load.error(key, f"Ω/ω1 = {W / w1:.9g} is a natural frequency of the welded, "
+                         f"undamped system (pole at Ω/ω1 = {r:.9g}): no steady state exists; "
+                         "give rods.damping_ratio > 0 or another frequency")
+
+
+def interface_bed(rc: RodsCase):
+    """The interface law of a validated case: ``(Bed, SegalmanIwan or None)``.
+
+    The one place that turns the case's interface keys into a bed, used by ``slipcycle
+    run``, ``slipcycle limits`` and the Python API alike; an Iwan element uses the given
+    ``iwan_chi``/``iwan_beta`` (else the fit to the rings) at the mean normal force F0.
+    """
+    from slipcycle.rods.interfaces import SegalmanIwan, iwan_bed, make_bed
+
+    rods, N0 = rc.rods, rc.exc.axial_force
+    if rods.interface != "iwan":
+        return make_bed(rods, N0, rc.rings), None
+    params = None
+    if rc.iwan_chi is not None:
+        params = SegalmanIwan(2.0 / 3.0 * rods.friction * N0 * rods.contact_radius,
+                              rods.interface_stiffness * rods.contact_J, rc.iwan_chi,
+                              rc.iwan_beta)
+    return iwan_bed(rods, N0, None, params)
+
+
 def analyse(rc: RodsCase) -> dict:
     """Dynamic steady state, quasi-static loop, slip inception and regularisation study."""
-    from slipcycle.rods.interfaces import SegalmanIwan, iwan_bed, make_bed
     from slipcycle.rods.modal import modal_basis, modal_frf, steady_state
     from slipcycle.rods.quasistatic import (
         qs_normal_force,
@@ -132,17 +201,7 @@ def analyse(rc: RodsCase) -> dict:
     from slipcycle.rods.welded import natural_frequencies, normal_force_history
 
     rods, exc = rc.rods, rc.exc
-    N0 = exc.axial_force
-    iw = None
-    if rods.interface == "iwan":
-        params = None
-        if rc.iwan_chi is not None:
-            params = SegalmanIwan(2.0 / 3.0 * rods.friction * N0 * rods.contact_radius,
-                                  rods.interface_stiffness * rods.contact_J, rc.iwan_chi,
-                                  rc.iwan_beta)
-        bed, iw = iwan_bed(rods, N0, rc.rings, params)
-    else:
-        bed = make_bed(rods, N0, rc.rings)
+    bed, iw = interface_bed(rc)
     basis = modal_basis(rods, rc.modes, rc.static_correction)
     dyn = steady_state(rods, exc, bed, basis, rc.steps_per_cycle, rc.cycles, rc.steady_tol)
     qs = quasi_static_loop(rods, exc, bed, rc.steps_per_cycle)
@@ -166,6 +225,31 @@ def analyse(rc: RodsCase) -> dict:
                                    rc.steps_per_cycle)
     return {"dyn": dyn, "qs": qs, "bed": bed, "basis": basis, "iwan": iw,
             "inception_dyn": inc_dyn, "inception_qs": inc_qs, "natural": nat, "reg": reg}
+
+
+_REG_UNITS = {f"regularisation.{m}.{k}": "1" for m in ("distributed", "jenkins", "coulomb",
+                                                      "iwan")
+              for k in ("slope_microslip", "slope_macroslip")}
+
+#: unit of every numeric entry of the `slipcycle run` summary (nested entries dotted)
+RUN_UNITS = {
+    "omega1": "rad/s", "omega1_hz": "Hz", "natural_frequencies": "rad/s",
+    "frequency": "rad/s", "frequency_ratio": "1", "rotation_amplitude": "rad",
+    "T_dyn_max": "N m", "T_qs_max": "N m", "torque_ratio": "1",
+    "dissipation_per_cycle": "J", "dissipation_per_cycle_qs": "J", "dissipation_ratio": "1",
+    "damping_loss_per_cycle": "J", "input_work_per_cycle": "J", "energy_balance_error": "1",
+    "slip_inception_amplitude_dyn": "rad", "slip_inception_amplitude_qs": "rad",
+    "slip_inception_torque": "N m", "gross_slip_torque": "N m", "slipped": "1",
+    "separation": "1", "min_normal_force": "N", "steady_state_reached": "1",
+    "cycles_run": "1", "steady_residual": "1", "modes_per_rod": "1", "rings": "1",
+    "iwan.F_S": "N m", "iwan.K_T": "N m/rad", "iwan.chi": "1", "iwan.beta": "1",
+    "iwan.elements": "1", **_REG_UNITS,
+    "regularisation.iwan_fit.F_S": "N m", "regularisation.iwan_fit.K_T": "N m/rad",
+    "regularisation.iwan_fit.chi": "1", "regularisation.iwan_fit.beta": "1",
+}
+
+#: every word of the categorical entries of the `slipcycle run` summary
+RUN_FLAGS = {"model": ("rods",), "interface": INTERFACES}
 
 
 def _none_if_inf(x: float):
@@ -213,13 +297,12 @@ def run_case(case: Case) -> RunOutputs:
         "cycles_run": dyn.cycles,
         "steady_residual": dyn.residual,
         "modes_per_rod": rc.modes,
-        "rings": rc.rings if rods.interface in ("distributed", "iwan") else None,
-        "units": {"omega1": "rad/s", "T_dyn_max": "N m", "dissipation_per_cycle": "J",
-                  "slip_inception_amplitude_dyn": "rad"},
+        "rings": rc.rings if rods.interface == "distributed" else None,
     }
     if res["iwan"] is not None:
         iw = res["iwan"]
-        summary["iwan"] = {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi, "beta": iw.beta}
+        summary["iwan"] = {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi, "beta": iw.beta,
+                           "elements": res["bed"].size}
     reg = res["reg"]
     if reg is not None:
         summary["regularisation"] = {
@@ -227,6 +310,8 @@ def run_case(case: Case) -> RunOutputs:
                 "slope_macroslip": reg[m]["slope_macroslip"]}
             for m in ("distributed", "jenkins", "coulomb", "iwan")}
         summary["regularisation"]["iwan_fit"] = reg["iwan_params"]
+    summary["units"] = {k: v for k, v in RUN_UNITS.items()
+                        if k.split(".")[0] in summary}
     tatt = {"units": "s"}
     ds = xr.Dataset(
         {"theta": ("time", dyn.theta, {"units": "rad", "long_name": "drive rotation"}),
@@ -246,4 +331,4 @@ def run_case(case: Case) -> RunOutputs:
                "time_history": lambda: plots.time_history(ds)}
     if reg is not None:
         figures["regularisation"] = lambda: plots.regularisation(reg)
-    return RunOutputs(summary=summary, dataset=ds, figures=figures)
+    return RunOutputs(summary=summary, dataset=ds, figures=figures, flags=dict(RUN_FLAGS))

@@ -1,4 +1,4 @@
-"""Limits of the quasi-static analysis: limit frequency and regime maps (seed 000).
+"""Limits of the quasi-static analysis: limit frequency and regime maps.
 
 For a drive amplitude Θ_a and frequency Ω the dynamic steady state (modal model) and the
 quasi-static loop (massless rods, same interface) give the maximum interface torques
@@ -7,6 +7,20 @@ T_dyn, T_qs and the dissipation per cycle D_dyn, D_qs. The *limit frequency* is 
 crossing, located by bisection in log Ω); the same is reported separately for the
 dissipation. The maps evaluate both ratios over Ω/ω1 × amplitude and over Ω/ω1 × interface
 position L1/(L1 + L2) (total length and everything else fixed; each geometry uses its own ω1).
+
+Every point is computed exactly as ``slipcycle run`` computes its one point (same interface
+bed from :func:`slipcycle.rods.case.interface_bed`, same steps, cycle limit and tolerance),
+so a number read off the limit curve equals the one ``slipcycle run`` reports at that
+frequency.
+
+Undamped resonance. With ζ = 0 and a welded interface the system is linear and lossless:
+at a natural frequency of the welded system (both outer ends fixed) the steady response is
+unbounded — a pole. Such points are not computed; they are flagged (``pole``), their ratios
+are NaN (masked in figures, never passed to the bisection) and the pole frequencies are
+listed in the summary. A frictional interface can slip and dissipate, so it is solved at
+every frequency; a point that does not reach a periodic state is flagged ``converged =
+False``. Natural frequencies by transfer matrices: Graff, *Wave Motion in Elastic
+Solids* (1975), §2.2.
 """
 
 from __future__ import annotations
@@ -22,7 +36,51 @@ from slipcycle.rods.model import Excitation, TwoRods
 from slipcycle.rods.quasistatic import quasi_static_loop
 from slipcycle.rods.welded import natural_frequencies, omega1
 
-__all__ = ["Study", "limit_frequency", "regime_map", "position_map", "gross_slip_amplitude"]
+__all__ = ["Study", "Point", "limit_frequency", "regime_map", "position_map",
+           "gross_slip_amplitude", "LimitsCase", "parse_limits", "run_limits",
+           "POLE_RTOL", "LIMITS_UNITS", "LIMITS_FLAGS"]
+
+#: a frequency within this relative distance of an undamped natural frequency is a pole
+POLE_RTOL = 1e-6
+
+#: bytes per map point kept until the figures are written (arrays, Dataset, figure mesh)
+_MAP_POINT_BYTES = 400.0
+#: largest estimated memory of one analysis [bytes]
+MEMORY_LIMIT = 4.0e9
+
+
+@dataclass(frozen=True)
+class Point:
+    """One (Ω, Θ_a) point: dynamic and quasi-static maxima and losses.
+
+    Attributes
+    ----------
+    T_dyn, T_qs : float
+        Maximum interface torque, dynamic (over the last cycle run, also when it did not
+        converge) and quasi-static (N m); NaN at a pole or when non-finite.
+    D_dyn, D_qs : float
+        Friction dissipation per cycle, dynamic and quasi-static (J); likewise.
+    converged : bool
+        Periodic steady state reached (False at a pole).
+    pole : bool
+        Ω is an undamped natural frequency of the welded system (no steady state).
+    """
+
+    T_dyn: float
+    T_qs: float
+    D_dyn: float
+    D_qs: float
+    converged: bool
+    pole: bool = False
+
+    @property
+    def torque_ratio(self) -> float:
+        return self.T_dyn / self.T_qs if self.T_qs > 0 else math.nan
+
+    @property
+    def dissipation_ratio(self) -> float:
+        """D_dyn/D_qs; NaN when the quasi-static loop does not dissipate."""
+        return self.D_dyn / self.D_qs if self.D_qs > 0 else math.nan
 
 
 @dataclass
@@ -34,8 +92,8 @@ class Study:
     bed: Bed
     basis: ModalBasis
     steps_per_cycle: int = 400
-    max_cycles: int = 150
-    tol: float = 1e-5
+    max_cycles: int = 300
+    tol: float = 1e-6
     _props: dict = field(default_factory=dict)
     _qs: dict = field(default_factory=dict)
 
@@ -45,6 +103,25 @@ class Study:
             self._qs["w1"] = omega1(self.rods)
         return self._qs["w1"]
 
+    @property
+    def undamped_welded(self) -> bool:
+        return self.rods.damping_ratio == 0.0 and self.bed.kind == "welded"
+
+    def poles(self, max_ratio: float) -> np.ndarray:
+        """Pole frequency ratios Ω/ω1 ≤ max_ratio (empty unless welded and undamped)."""
+        if not self.undamped_welded:
+            return np.zeros(0)
+        key = ("poles", max_ratio)
+        if key not in self._qs:
+            n = int(max_ratio * 1.05) + 2
+            w = natural_frequencies(self.rods.with_(interface="welded"), n) / self.omega1
+            self._qs[key] = w[w <= max_ratio * (1 + POLE_RTOL)]
+        return self._qs[key]
+
+    def is_pole(self, ratio: float) -> bool:
+        p = self.poles(ratio * (1 + 2 * POLE_RTOL))
+        return bool(np.any(np.abs(ratio / p - 1.0) <= POLE_RTOL)) if p.size else False
+
     def qs(self, amplitude: float):
         key = ("qs", amplitude)
         if key not in self._qs:
@@ -53,8 +130,10 @@ class Study:
                 self.steps_per_cycle)
         return self._qs[key]
 
-    def point(self, ratio: float, amplitude: float) -> tuple[float, float, bool]:
-        """(T_dyn/T_qs, D_dyn/D_qs, converged) at Ω = ratio ω1 and Θ_a = amplitude."""
+    def solve(self, ratio: float, amplitude: float) -> Point:
+        """The point at Ω = ratio ω1 and Θ_a = amplitude."""
+        if self.is_pole(ratio):
+            return Point(math.nan, math.nan, math.nan, math.nan, False, True)
         W = ratio * self.omega1
         key = (W, self.steps_per_cycle)
         if key not in self._props:
@@ -64,10 +143,18 @@ class Study:
         dyn = steady_state(self.rods, exc, self.bed, self.basis, self.steps_per_cycle,
                            self.max_cycles, self.tol, propagator=self._props[key])
         qs = self.qs(amplitude)
+        finite = math.isfinite(dyn.T_max) and math.isfinite(dyn.dissipation)
         Dq = qs.dissipation
-        d_ratio = dyn.dissipation / Dq if Dq > 1e-12 * qs.T_max * np.ptp(qs.delta) \
-            and Dq > 0 else math.nan
-        return dyn.T_max / qs.T_max, d_ratio, dyn.converged
+        if not Dq > 1e-12 * qs.T_max * float(np.ptp(qs.delta)):
+            Dq = 0.0  # no loss in the quasi-static loop: the ratio is undefined
+        # the last cycle's values are kept (as `slipcycle run` reports them) with the flag
+        return Point(dyn.T_max if finite else math.nan, qs.T_max,
+                     dyn.dissipation if finite else math.nan, Dq, dyn.converged and finite)
+
+    def point(self, ratio: float, amplitude: float) -> tuple[float, float, bool]:
+        """(T_dyn/T_qs, D_dyn/D_qs, converged) at Ω = ratio ω1 and Θ_a = amplitude."""
+        p = self.solve(ratio, amplitude)
+        return p.torque_ratio, p.dissipation_ratio, p.converged
 
 
 def gross_slip_amplitude(rods: TwoRods, N: float) -> float:
@@ -77,21 +164,47 @@ def gross_slip_amplitude(rods: TwoRods, N: float) -> float:
     return Tg * (rods.rods_compliance + (1.0 / k0 if math.isfinite(k0) else 0.0))
 
 
-def _first_crossing(study: Study, ratios, values, tolerance, which, refine=6):
-    err = np.abs(np.asarray(values) - 1.0)
-    bad = np.flatnonzero(~(err <= tolerance))
-    if bad.size == 0:
+def _inside(p: Point, which: int, tolerance: float) -> bool | None:
+    """Whether a point's ratio is within ε of 1; None when unknown (no steady state).
+
+    A pole is outside (unbounded response). For the dissipation, a point whose quasi-static
+    loop does not dissipate is inside if the dynamic one does not either, outside if it does
+    (dynamic slip that the quasi-static analysis misses).
+    """
+    if p.pole:
+        return False
+    if not p.converged:
+        return None
+    if which == 0:
+        return abs(p.torque_ratio - 1.0) <= tolerance
+    if p.D_qs > 0:
+        return abs(p.dissipation_ratio - 1.0) <= tolerance
+    return p.D_dyn <= 0.0  # steady_state already zeroes the round-off of a stuck cycle
+
+
+def _first_crossing(study: Study, ratios, points, tolerance, which, refine=6):
+    """First Ω/ω1 where the ratio leaves 1 ± ε, refined by bisection in log Ω.
+
+    Status ``found``; ``below_range`` (already outside at the first ratio);
+    ``above_range`` (inside on the whole axis: the value is a lower bound);
+    ``not_converged`` (a point without a steady state comes first: the value, the last
+    ratio known to be inside, is a lower bound).
+    """
+    states = [_inside(p, which, tolerance) for p in points]
+    first = next((i for i, s in enumerate(states) if s is not True), None)
+    if first is None:
         return float(ratios[-1]), "above_range"
-    i = int(bad[0])
-    if i == 0:
-        return float(ratios[0]), "below_range"
-    lo, hi = math.log(ratios[i - 1]), math.log(ratios[i])
+    if first == 0:
+        return float(ratios[0]), "below_range" if states[0] is False else "not_converged"
+    if states[first] is None:
+        return float(ratios[first - 1]), "not_converged"
+    lo, hi = math.log(ratios[first - 1]), math.log(ratios[first])
+    amp = study.exc.rotation_amplitude
     for _ in range(refine):
         mid = 0.5 * (lo + hi)
-        v = study.point(math.exp(mid), study.exc.rotation_amplitude)[which]
-        if abs(v - 1.0) <= tolerance:
+        if _inside(study.solve(math.exp(mid), amp), which, tolerance):
             lo = mid
-        else:
+        else:  # outside or unknown: the limit is not above mid
             hi = mid
     return float(math.exp(0.5 * (lo + hi))), "found"
 
@@ -103,60 +216,74 @@ def limit_frequency(study: Study, tolerance: float = 0.05, ratios=None,
     Returns
     -------
     dict
-        ``ratios``, ``torque_ratio``, ``dissipation_ratio``, ``converged`` (arrays over the
-        sweep), ``qs_limit_frequency_ratio`` and ``qs_limit_frequency_ratio_dissipation``
-        (None when the quasi-static loop does not dissipate) with their ``*_status``:
-        ``found``, ``below_range`` or ``above_range`` (the value is then a bound).
+        Arrays over the sweep (``ratios``,): ``torque_ratio``, ``dissipation_ratio``,
+        ``T_dyn``, ``T_qs`` (N m), ``D_dyn``, ``D_qs`` (J), ``converged``, ``pole``;
+        ``poles`` (pole ratios in range); ``qs_limit_frequency_ratio`` and
+        ``qs_limit_frequency_ratio_dissipation`` (None when the quasi-static loop does not
+        dissipate) with their ``*_status``: ``found``, ``below_range`` or ``above_range``
+        (the value is then a bound), ``not_converged`` (a point without a steady state
+        comes first; the value is a lower bound) or, for the dissipation, ``no_dissipation``.
     """
-    ratios = np.geomspace(0.01, 3.0, 40) if ratios is None else np.asarray(ratios)
+    ratios = np.geomspace(0.01, 3.0, 40) if ratios is None else np.asarray(ratios, float)
     amp = study.exc.rotation_amplitude
-    TR, DR, CV = [], [], []
     it = ratios
     if progress:
         from tqdm import tqdm
 
         it = tqdm(ratios, desc="frequency sweep", unit="pt")
-    for r in it:
-        a, b, c = study.point(float(r), amp)
-        TR.append(a)
-        DR.append(b)
-        CV.append(c)
-    TR, DR, CV = np.array(TR), np.array(DR), np.array(CV)
-    lim_T, st_T = _first_crossing(study, ratios, TR, tolerance, 0)
-    if np.all(np.isnan(DR)):
+    pts = [study.solve(float(r), amp) for r in it]
+    arr = {k: np.array([getattr(p, k) for p in pts]) for k in
+           ("T_dyn", "T_qs", "D_dyn", "D_qs", "converged", "pole")}
+    TR = np.array([p.torque_ratio for p in pts])
+    DR = np.array([p.dissipation_ratio for p in pts])
+    lim_T, st_T = _first_crossing(study, ratios, pts, tolerance, 0)
+    if not np.any(arr["D_qs"] > 0):
         lim_D, st_D = None, "no_dissipation"
     else:
-        lim_D, st_D = _first_crossing(study, ratios, np.where(np.isnan(DR), 1.0, DR),
-                                      tolerance, 1)
-    return {"ratios": ratios, "torque_ratio": TR, "dissipation_ratio": DR, "converged": CV,
+        lim_D, st_D = _first_crossing(study, ratios, pts, tolerance, 1)
+    return {"ratios": ratios, "torque_ratio": TR, "dissipation_ratio": DR, **arr,
+            "converged": arr["converged"].astype(bool), "pole": arr["pole"].astype(bool),
+            "poles": study.poles(float(ratios.max())),
             "qs_limit_frequency_ratio": lim_T, "qs_limit_frequency_ratio_status": st_T,
             "qs_limit_frequency_ratio_dissipation": lim_D,
             "qs_limit_frequency_ratio_dissipation_status": st_D}
 
 
+def _bar(total, desc, progress):
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="pt")
+
+
 def regime_map(study: Study, ratios, amplitude_factors, progress: bool = True) -> dict:
-    """T_dyn/T_qs and D_dyn/D_qs over Ω/ω1 × Θ_a/Θ_g, shape (len(ratios), len(factors))."""
+    """T_dyn/T_qs and D_dyn/D_qs over Ω/ω1 × Θa/Θg, shape (len(ratios), len(factors)).
+
+    ``converged`` (same shape, bool) is False at points without a periodic steady state
+    (and at poles, also listed in ``pole``); ``resonances`` are the stuck system's natural
+    frequency ratios in range.
+    """
     ratios = np.asarray(ratios, dtype=float)
     fac = np.asarray(amplitude_factors, dtype=float)
     theta_g = gross_slip_amplitude(study.rods, study.exc.axial_force)
     TR = np.empty((ratios.size, fac.size))
     DR = np.empty_like(TR)
     CV = np.empty(TR.shape, dtype=bool)
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=TR.size, desc="regime map", unit="pt")
+    PL = np.empty(TR.shape, dtype=bool)
+    bar = _bar(TR.size, "regime map", progress)
     for i, r in enumerate(ratios):
         for j, f in enumerate(fac):
-            TR[i, j], DR[i, j], CV[i, j] = study.point(float(r), float(f * theta_g))
+            p = study.solve(float(r), float(f * theta_g))
+            TR[i, j], DR[i, j], CV[i, j], PL[i, j] = (p.torque_ratio, p.dissipation_ratio,
+                                                      p.converged, p.pole)
             if bar is not None:
                 bar.update()
     if bar is not None:
         bar.close()
     nat = natural_frequencies(study.rods, 12, study.bed.stiffness) / study.omega1
     return {"ratios": ratios, "amplitude_factors": fac, "theta_gross": theta_g,
-            "torque_ratio": TR, "dissipation_ratio": DR, "converged": CV,
+            "torque_ratio": TR, "dissipation_ratio": DR, "converged": CV, "pole": PL,
             "resonances": nat[nat <= ratios.max()]}
 
 
@@ -172,12 +299,9 @@ def position_map(study: Study, fractions, ratios, amplitude: float | None = None
     TR = np.empty((fr.size, ratios.size))
     DR = np.empty_like(TR)
     CV = np.empty(TR.shape, dtype=bool)
+    PL = np.empty(TR.shape, dtype=bool)
     W1 = np.empty(fr.size)
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=TR.size, desc="position map", unit="pt")
+    bar = _bar(TR.size, "position map", progress)
     for i, x in enumerate(fr):
         rods = study.rods.with_(rod1=replace(study.rods.rod1, length=float(x * total)),
                                 rod2=replace(study.rods.rod2, length=float((1 - x) * total)))
@@ -186,10 +310,197 @@ def position_map(study: Study, fractions, ratios, amplitude: float | None = None
                     study.steps_per_cycle, study.max_cycles, study.tol)
         W1[i] = sub.omega1
         for j, r in enumerate(ratios):
-            TR[i, j], DR[i, j], CV[i, j] = sub.point(float(r), amp)
+            p = sub.solve(float(r), amp)
+            TR[i, j], DR[i, j], CV[i, j], PL[i, j] = (p.torque_ratio, p.dissipation_ratio,
+                                                      p.converged, p.pole)
             if bar is not None:
                 bar.update()
     if bar is not None:
         bar.close()
     return {"fractions": fr, "ratios": ratios, "omega1": W1, "torque_ratio": TR,
-            "dissipation_ratio": DR, "converged": CV}
+            "dissipation_ratio": DR, "converged": CV, "pole": PL}
+
+
+# ---------------------------------------------------------------------------------------
+# `slipcycle limits`: the [limits] table, the analysis and its outputs
+# ---------------------------------------------------------------------------------------
+@dataclass
+class LimitsCase:
+    """A validated limits case: the rods case and the axes of the sweeps."""
+
+    rc: object  # slipcycle.rods.case.RodsCase
+    tolerance: float
+    ratios: np.ndarray
+    amplitude_ratios: np.ndarray
+    positions: np.ndarray
+    position_frequencies: int
+
+
+def _axis(sec, key, default, **bounds):
+    """A grid axis; values given as a list are sorted."""
+    vals = sec.grid(key, default, max_num=10000, **bounds)
+    return vals if isinstance(sec.data.get(key, default), dict) else np.sort(vals)
+
+
+def _format_bytes(nbytes: float) -> str:
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if nbytes >= size:
+            return f"{nbytes / size:.3g} {unit}"
+    return f"{nbytes:.0f} B"
+
+
+def parse_limits(case, tolerance: float, maps: bool = True) -> LimitsCase:
+    """Validate a limits case completely: ``[limits]`` with the same :class:`Section` rules
+    as every table (unknown keys with a suggestion, types, bounds, sizes refused with their
+    estimated memory), then the rods case (:func:`slipcycle.rods.case.parse_case`).
+
+    ``[limits]`` keys: ``frequency_ratio`` (Ω/ω1 axis, list or ``{start, stop, num}``
+    geometric; default 0.01…3 × 40), ``amplitude_ratio`` (Θa/Θg, geometric; 0.3…3 × 20),
+    ``position`` (L1/(L1 + L2), linear; 0.1…0.9 × 9), ``position_frequencies`` (20).
+    """
+    from slipcycle.io import CaseError
+    from slipcycle.rods.case import parse_case
+
+    if not (0.0 < tolerance < 1.0):
+        raise CaseError("--tolerance", f"must be in (0, 1), got {tolerance:g}")
+    load = case.data.get("loading")
+    if isinstance(load, dict) and "frequency_ratio" not in load and "frequency" not in load:
+        load["frequency_ratio"] = 1.0  # the sweep sets the frequency
+    sec = case.section("limits", required=False)
+    ratios = _axis(sec, "frequency_ratio", {"start": 0.01, "stop": 3.0, "num": 40},
+                   gt=0.0, le=1e3, geometric=True)
+    amps = _axis(sec, "amplitude_ratio", {"start": 0.3, "stop": 3.0, "num": 20},
+                 gt=0.0, le=1e4, geometric=True)
+    pos = _axis(sec, "position", {"start": 0.1, "stop": 0.9, "num": 9}, gt=0.0, le=0.999)
+    npf = sec.int("position_frequencies", 20, ge=2, le=10000)
+    if maps:
+        for key, size in (("amplitude_ratio", ratios.size * amps.size),
+                          ("position", pos.size * npf)):
+            need = size * _MAP_POINT_BYTES
+            if need > MEMORY_LIMIT:
+                raise sec.error(key, f"a map of {size:.3g} points needs about "
+                                f"{_format_bytes(need)} of memory (limit "
+                                f"{_format_bytes(MEMORY_LIMIT)})")
+    rc = parse_case(case, limits=True)
+    return LimitsCase(rc, tolerance, ratios, amps, pos, npf)
+
+
+#: unit of every numeric entry of the limits summary
+LIMITS_UNITS = {
+    "tolerance": "1", "omega1": "rad/s", "rotation_amplitude": "rad",
+    "qs_limit_frequency_ratio": "1", "qs_limit_frequency": "rad/s",
+    "qs_limit_frequency_ratio_dissipation": "1", "poles_frequency_ratio": "1",
+    "sweep_points_not_converged": "1", "sweep_points_at_pole": "1",
+    "wall_time_sweep_s": "s", "map_shape": "1", "map_points_not_converged": "1",
+    "position_map_points_not_converged": "1", "wall_time_map_s": "s",
+    "wall_time_position_map_s": "s", "theta_gross": "rad",
+    "resonances_frequency_ratio": "1", "position_omega1": "rad/s",
+    "iwan.F_S": "N m", "iwan.K_T": "N m/rad", "iwan.chi": "1", "iwan.beta": "1",
+    "iwan.elements": "1",
+}
+
+#: every word of the categorical entries of the limits summary
+LIMITS_FLAGS = {
+    "model": ("rods",),
+    "analysis": ("limits",),
+    "interface": ("welded", "distributed", "coulomb", "jenkins", "iwan"),
+    "qs_limit_frequency_ratio_status": ("found", "below_range", "above_range",
+                                        "not_converged"),
+    "qs_limit_frequency_ratio_dissipation_status": ("found", "below_range", "above_range",
+                                                    "not_converged", "no_dissipation"),
+}
+
+
+def make_study(rc) -> tuple[Study, object]:
+    """The study of a validated rods case, with ``slipcycle run``'s bed and settings;
+    also the Iwan parameters used (None for other interfaces)."""
+    from slipcycle.rods.case import interface_bed
+
+    bed, iw = interface_bed(rc)
+    basis = modal_basis(rc.rods, rc.modes, rc.static_correction)
+    return Study(rc.rods, rc.exc, bed, basis, rc.steps_per_cycle, rc.cycles,
+                 rc.steady_tol), iw
+
+
+def run_limits(lc: LimitsCase, maps: bool = True, progress: bool = False):
+    """Limit frequency (and maps) of a validated limits case → :class:`RunOutputs`."""
+    import time
+
+    import xarray as xr
+
+    from slipcycle.io import RunOutputs
+    from slipcycle.plot import rods as plots
+
+    rc, tol, ratios = lc.rc, lc.tolerance, lc.ratios
+    study, iw = make_study(rc)
+    t0 = time.perf_counter()
+    lim = limit_frequency(study, tol, ratios, progress=progress)
+    t1 = time.perf_counter()
+    summary = {
+        "model": "rods",
+        "analysis": "limits",
+        "tolerance": tol,
+        "interface": rc.rods.interface,
+        "omega1": study.omega1,
+        "rotation_amplitude": rc.exc.rotation_amplitude,
+        "qs_limit_frequency_ratio": lim["qs_limit_frequency_ratio"],
+        "qs_limit_frequency_ratio_status": lim["qs_limit_frequency_ratio_status"],
+        "qs_limit_frequency": lim["qs_limit_frequency_ratio"] * study.omega1,
+        "qs_limit_frequency_ratio_dissipation": lim["qs_limit_frequency_ratio_dissipation"],
+        "qs_limit_frequency_ratio_dissipation_status":
+            lim["qs_limit_frequency_ratio_dissipation_status"],
+        "poles_frequency_ratio": lim["poles"],
+        "dissipation_per_cycle": None,
+        "sweep_points_not_converged": int(np.sum(~lim["converged"] & ~lim["pole"])),
+        "sweep_points_at_pole": int(np.sum(lim["pole"])),
+        "wall_time_sweep_s": t1 - t0,
+    }
+    if iw is not None:
+        summary["iwan"] = {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi, "beta": iw.beta,
+                           "elements": study.bed.size}
+    one = {"units": "1"}
+    fdim = "frequency_ratio"
+    ds = xr.Dataset(
+        {"torque_ratio": (fdim, lim["torque_ratio"], one),
+         "dissipation_ratio": (fdim, lim["dissipation_ratio"], one),
+         "T_dyn_max": (fdim, lim["T_dyn"], {"units": "N m"}),
+         "T_qs_max": (fdim, lim["T_qs"], {"units": "N m"}),
+         "dissipation_per_cycle": (fdim, lim["D_dyn"], {"units": "J"}),
+         "dissipation_per_cycle_qs": (fdim, lim["D_qs"], {"units": "J"}),
+         "converged": (fdim, lim["converged"], one),
+         "pole": (fdim, lim["pole"], one)},
+        coords={fdim: (fdim, ratios, one)})
+    figures = {"limit_frequency": lambda: plots.limit_curve(lim, tol)}
+    if maps:
+        m = regime_map(study, ratios, lc.amplitude_ratios, progress=progress)
+        t2 = time.perf_counter()
+        pr = np.geomspace(ratios.min(), ratios.max(), lc.position_frequencies)
+        pm = position_map(study, lc.positions, pr, progress=progress)
+        t3 = time.perf_counter()
+        summary.update({
+            "map_shape": list(m["torque_ratio"].shape),
+            "map_points_not_converged": int(np.sum(~m["converged"])),
+            "position_map_points_not_converged": int(np.sum(~pm["converged"])),
+            "wall_time_map_s": t2 - t1,
+            "wall_time_position_map_s": t3 - t2,
+            "theta_gross": m["theta_gross"],
+            "resonances_frequency_ratio": m["resonances"],
+            "position_omega1": pm["omega1"],
+        })
+        ds = ds.assign_coords(
+            map_frequency_ratio=("map_frequency_ratio", ratios, one),
+            amplitude_ratio=("amplitude_ratio", lc.amplitude_ratios, one),
+            position=("position", lc.positions, one),
+            position_frequency_ratio=("position_frequency_ratio", pm["ratios"], one))
+        dims = ("map_frequency_ratio", "amplitude_ratio")
+        ds["map_torque_ratio"] = (dims, m["torque_ratio"], one)
+        ds["map_dissipation_ratio"] = (dims, m["dissipation_ratio"], one)
+        ds["map_converged"] = (dims, m["converged"], one)
+        pd = ("position", "position_frequency_ratio")
+        ds["position_torque_ratio"] = (pd, pm["torque_ratio"], one)
+        ds["position_dissipation_ratio"] = (pd, pm["dissipation_ratio"], one)
+        ds["position_converged"] = (pd, pm["converged"], one)
+        figures["regime_map"] = lambda: plots.regime_map(m, tol)
+        figures["position_map"] = lambda: plots.position_map(pm, tol)
+    summary["units"] = {k: v for k, v in LIMITS_UNITS.items() if k.split(".")[0] in summary}
+    return RunOutputs(summary=summary, dataset=ds, figures=figures, flags=dict(LIMITS_FLAGS))

@@ -337,7 +337,9 @@ def _lu(A):
 def _lu_solve(lu, b):
     from scipy.linalg import lu_solve
 
-    return lu_solve(lu, b)
+    if not np.all(np.isfinite(b)):
+        return np.full(b.shape, np.nan)  # masked: the caller falls back to plain cycling
+    return lu_solve(lu, b, check_finite=False)
 
 
 def _stuck_step_matrix(basis: ModalBasis, coef: np.ndarray, k0: float) -> np.ndarray:
@@ -449,6 +451,11 @@ def steady_state(rods: TwoRods, exc: Excitation, bed: Bed, basis: ModalBasis,
     coef = propagator.coef
     basis = propagator.basis
     q, v, d0, T0 = linear_steady_state(basis, exc, k0)
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v)) and math.isfinite(d0)
+            and math.isfinite(T0)):
+        # Ω on an undamped pole of the stuck modal model: no stuck steady state to start
+        # from; start from rest and let the interface (or the cycle limit) decide
+        q, v, d0, T0 = np.zeros(basis.size), np.zeros(basis.size), 0.0, 0.0
     if bed.rigid:
         t_el = np.array([float(np.clip(T0, -bed.capacity(Nc[0]), bed.capacity(Nc[0])))])
         d0 = 0.0 if not math.isfinite(k0) else d0
@@ -499,6 +506,9 @@ def steady_state(rods: TwoRods, exc: Excitation, bed: Bed, basis: ModalBasis,
             zK = np.concatenate([q, v])
             z0 = np.concatenate([z0q, z0v])
             dz = z0 + _lu_solve(lu, zK - z0) - zK
+            if not np.all(np.isfinite(dz)):  # singular monodromy (undamped resonance)
+                accelerate = False
+                continue
             _shift_state(basis, bed, k_used, q, v, dz, t_el, state, Nc[0])
     D = float(np.sum(d - d_start))
     if abs(D) <= 1e-10 * float(np.max(np.abs(T_out))) * float(np.ptp(d_out)):

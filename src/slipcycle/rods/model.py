@@ -1,4 +1,4 @@
-"""Two coaxial elastic rods pressed end to end, twisted at one end (SPEC §5, seed 000).
+"""Two coaxial elastic rods pressed end to end, twisted at one end (docs/rods.md).
 
 Rod 1 occupies x ∈ [−L1, 0] and is clamped at x = −L1; rod 2 occupies [0, L2] and is
 driven at x = L2 by a prescribed rotation Θ(t) = Θ_a sin Ωt and an axial compressive force

@@ -1,4 +1,4 @@
-"""Quasi-static solution: massless rods in series with the interface (SPEC §5).
+"""Quasi-static solution: massless rods in series with the interface (docs/rods.md).
 
 With inertia neglected the rods are torsional springs G_j J_j/L_j in series, so
 δ = Θ − C_r T with C_r = L1/(G1J1) + L2/(G2J2), and the normal force equals the applied

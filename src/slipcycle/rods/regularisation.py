@@ -1,4 +1,4 @@
-"""Regularisation study (seed 000 §1.1): dissipation per cycle versus amplitude, per model.
+"""Regularisation study: dissipation per cycle versus amplitude, per model.
 
 The quasi-static loop of each interface model (distributed, jenkins, coulomb, fitted iwan) is
 computed over drive amplitudes Θ_a from well inside stick to far into gross slip. Two
@@ -70,7 +70,7 @@ def regularisation_study(rods: TwoRods, exc: Excitation, rings: int = 100,
         "jenkins": jenkins_bed(rods),
         "coulomb": coulomb_bed(rods),
     }
-    ib, iw = iwan_bed(rods, N0, rings, iwan)
+    ib, iw = iwan_bed(rods, N0, None, iwan)
     beds["iwan"] = ib
     out: dict = {"amplitude": amps, "gross_slip_torque": Tg,
                  "iwan_params": {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi, "beta": iw.beta}}
