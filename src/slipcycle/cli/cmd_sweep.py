@@ -9,7 +9,11 @@ cluster (``--scheduler tcp://host:port``). When every cell is done, ``DIR/summar
 and ``DIR/result.nc`` (an xarray Dataset over the sweep axes) are written.
 
 Any model works: a halfspace case with ``--set loading.Q1=… --set loading.phase=…`` gives
-a Ŵ map through the same machinery.
+a Ŵ map through the same machinery. Categorical entries (``steady_state``) are stored as
+integer codes with CF ``flag_values``/``flag_meanings``, and every entry carries the
+``units`` the model gives in its summary.
+
+One sweep at a time may use a store: a second one on the same ``--out`` stops at once.
 """
 
 from __future__ import annotations
@@ -21,9 +25,24 @@ from pathlib import Path
 import numpy as np
 
 
+class _Workers(argparse.Action):
+    """``--workers N``: a whole number >= 1, refused in one line otherwise."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        try:
+            n = int(values)
+        except ValueError:
+            n = 0
+        if n < 1:
+            # parser.exit, not parser.error: one line, no usage text
+            parser.exit(2, f"error: --workers: must be a whole number >= 1, got "
+                           f"{values!r}\n")
+        setattr(namespace, self.dest, n)
+
+
 def add_common(p) -> None:
     """Options shared by the sweep-based commands (sweep, basins, shakedown)."""
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", action=_Workers, default=None, metavar="N",
                    help="local worker processes (default: all cores; 1 = this process)")
     p.add_argument("--scheduler", default=None,
                    help="address of an existing Dask scheduler, e.g. tcp://10.0.0.1:8786")
@@ -51,12 +70,20 @@ def as_case_error(exc):
     return CaseError(exc.key, exc.problem)
 
 
-def store_dataset(store, axes, dims=None):
+def store_dataset(store, axes, dims=None, attrs=None):
     """xarray Dataset of a sweep store (dims: one per axis, then ``node``/``i`` for
-    per-cell vectors)."""
+    per-cell vectors).
+
+    Each variable carries the attributes the task gave with its outputs (units, CF flags),
+    overridden by ``attrs`` (output name -> attributes) where given; a variable nobody
+    described gets none (no unit is guessed).
+    """
     import xarray as xr
 
     data = store.read()
+    described = store.output_attrs
+    for name, extra in (attrs or {}).items():
+        described[name] = {**described.get(name, {}), **extra}
     dims = dims or [a.name.replace(".", "_") for a in axes]
     coords = {}
     for d, a in zip(dims, axes, strict=True):
@@ -66,10 +93,8 @@ def store_dataset(store, axes, dims=None):
         extra = [f"{name}_dim{k}" for k in range(arr.ndim - len(dims))]
         if name == "dissipation_per_node" or name == "initial_slip":
             extra = ["node"][:arr.ndim - len(dims)]
-        units = "J" if "dissipation" in name else ("m" if "slip" in name and
-                                                   "n_" not in name else "1")
-        ds[name] = (tuple(dims) + tuple(extra), arr, {"units": units})
-    ds["done"] = (tuple(dims), store.done(), {"units": "1"})
+        ds[name] = (tuple(dims) + tuple(extra), arr, dict(described.get(name, {})))
+    ds["done"] = (tuple(dims), store.done(), {"long_name": "cell computed"})
     return ds
 
 
@@ -77,40 +102,57 @@ def execute(args: argparse.Namespace) -> int:
     from slipcycle.cli.models import MODEL_RUNNERS
     from slipcycle.io import RunOutputs, read_case, write_outputs
     from slipcycle.sweep import SweepError, run_sweep
-    from slipcycle.sweep.case import STEADY_CODES, make_task, parse_set, validate_cells
+    from slipcycle.sweep.case import make_task, parse_set, validate_cells
+    from slipcycle.sweep.core import lock_store, no_store_to_resume
 
     case = read_case(args.case, models=list(MODEL_RUNNERS))
+    store_path = Path(args.out) / "sweep.zarr"
     try:
         axes = parse_set(args.sets)
         validate_cells(case.text, case.path, axes)
-        store_path = Path(args.out) / "sweep.zarr"
-        store = run_sweep(make_task(case.text, case.path), axes, store_path,
-                          description={"case": case.text, "command": "sweep"},
-                          resume=args.resume, workers=args.workers,
-                          scheduler=args.scheduler, progress=not args.no_progress,
-                          stop_after=args.stop_after)
+        if args.resume and not store_path.exists():
+            raise no_store_to_resume(store_path)
+        # held until the outputs are written: a second sweep on --out stops at once
+        with lock_store(store_path):
+            store = run_sweep(make_task(case.text, case.path), axes, store_path,
+                              description={"case": case.text, "command": "sweep",
+                                           # codes and units from the model's flags
+                                           # (stores of older versions are not resumed)
+                                           "store_format": 2},
+                              resume=args.resume, workers=args.workers,
+                              scheduler=args.scheduler, progress=not args.no_progress,
+                              stop_after=args.stop_after)
+            done = store.done()
+            if not done.all():
+                print(f"sweep stopped with {int(done.sum())} of {done.size} runs done; "
+                      f"complete it with --resume", flush=True)
+                return 0
+            summary = _write_results(args, case, store, axes, store_path, RunOutputs,
+                                     write_outputs)
     except SweepError as exc:
         raise as_case_error(exc) from None
-    done = store.done()
-    if not done.all():
-        print(f"sweep stopped with {int(done.sum())} of {done.size} runs done; "
-              f"complete it with --resume", flush=True)
-        return 0
+    print(json.dumps({k: summary[k] for k in ("runs", "axes", "dissipation_per_cycle")},
+                     indent=2, default=str))
+    print(f"results written to {args.out}/")
+    return 0
+
+
+def _write_results(args, case, store, axes, store_path, RunOutputs, write_outputs):  # noqa: N803
     ds = store_dataset(store, axes)
     data = store.read()
+    described = store.output_attrs
     summary = {"model": case.model, "analysis": "sweep",
                "axes": {a.name: list(a.values) for a in axes},
-               "runs": int(done.size), "store": str(store_path),
+               "runs": int(store.done().size), "store": str(store_path),
                "outputs": sorted(data),
-               "steady_state_codes": list(STEADY_CODES)}
-    if "dissipation_per_cycle" in data:
-        d = data["dissipation_per_cycle"]
+               "flags": {k: v["flag_meanings"].split() for k, v in described.items()
+                         if "flag_meanings" in v},
+               "units": {k: v["units"] for k, v in described.items() if "units" in v}}
+    d = data.get("dissipation_per_cycle")
+    if d is not None and d.dtype.kind == "f" and np.isfinite(d).any():
         summary["dissipation_per_cycle"] = {"min": float(np.nanmin(d)),
                                             "max": float(np.nanmax(d))}
     else:
         summary["dissipation_per_cycle"] = None
     write_outputs(args.out, RunOutputs(summary=summary, dataset=ds), case.text, case.path)
-    print(json.dumps({k: summary[k] for k in ("runs", "axes", "dissipation_per_cycle")},
-                     indent=2, default=str))
-    print(f"results written to {args.out}/")
-    return 0
+    return summary

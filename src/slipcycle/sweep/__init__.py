@@ -5,6 +5,6 @@
 - :mod:`~slipcycle.sweep.case`  sweeps over the keys of a case file (``slipcycle sweep``)
 """
 
-from slipcycle.sweep.core import Axis, SweepError, SweepStore, run_sweep
+from slipcycle.sweep.core import Axis, CellOutputs, SweepError, SweepStore, run_sweep
 
-__all__ = ["Axis", "SweepError", "SweepStore", "run_sweep"]
+__all__ = ["Axis", "CellOutputs", "SweepError", "SweepStore", "run_sweep"]

@@ -5,27 +5,35 @@ Each ``--set`` names a dotted key of the case (``loading.lam``, ``discrete.frict
 (:func:`slipcycle.cli.models.run_model`, any model: a halfspace case with
 ``--set loading.Q1=… --set loading.phase=…`` gives a Ŵ map) for every combination and
 stores the numeric entries of each ``summary.json`` as one cell of a Zarr store
-(:mod:`slipcycle.sweep.core`). ``steady_state`` is stored as an integer code (its meaning
-in the ``steady_state_codes`` attribute); wall times are left out so that a sweep is
-reproducible bit for bit.
+(:mod:`slipcycle.sweep.core`). What the entries mean comes from the model's own result
+description (:class:`slipcycle.io.RunOutputs`): a categorical entry listed in its ``flags``
+is stored as the integer position of its word, with CF ``flag_values``/``flag_meanings``;
+one the model gives no words for is stored as text (never as a code that could be
+wrong); every entry carries the ``units`` of the summary's ``units`` map, and none where
+the model gives none. Wall times are left out so that a sweep is reproducible bit for
+bit.
 """
 
 from __future__ import annotations
 
 import copy
+import math
 import re
+from collections.abc import Mapping
 from functools import partial
 
 import numpy as np
 
 from slipcycle.io import Case, CaseError
 from slipcycle.io.case import parse_case_text
-from slipcycle.sweep.core import Axis, SweepError, parse_values
+from slipcycle.sweep.core import Axis, CellOutputs, SweepError, check_size, parse_values
 
 __all__ = ["apply_overrides", "case_task", "parse_set", "validate_cells", "make_task",
-           "STEADY_CODES"]
+           "summary_numbers", "STEADY_CODES"]
 
-#: integer codes of ``steady_state`` in sweep stores
+#: integer codes of ``steady_state`` in the stores of ``slipcycle basins`` and
+#: ``slipcycle shakedown`` (the compiled discrete cycle's classes); case sweeps take their
+#: codes from the model's ``RunOutputs.flags`` instead
 STEADY_CODES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged", "inadmissible",
                 "failed")
 
@@ -56,6 +64,7 @@ def parse_set(items: list[str]) -> list[Axis]:
         axes.append(Axis(key, tuple(parse_values(spec, key))))
     if not axes:
         raise SweepError("--set", "give at least one --set key=start:stop:num")
+    check_size([a.size for a in axes], "--set")
     return axes
 
 
@@ -113,11 +122,15 @@ def validate_cells(case_text: str, case_path, axes: list[Axis], max_checked: int
     import itertools
 
     sizes = [a.size for a in axes]
-    cells = list(itertools.product(*(range(s) for s in sizes)))
-    if len(cells) > max_checked:
-        corners = list(itertools.product(*[(0, s - 1) for s in sizes]))
-        step = max(1, len(cells) // max_checked)
-        cells = sorted(set(corners) | set(cells[::step]))
+    total = math.prod(sizes)
+    if total <= max_checked:
+        cells = list(itertools.product(*(range(s) for s in sizes)))
+    else:
+        # every corner and an even spread, without listing the whole grid
+        corners = set(itertools.product(*[(0, s - 1) for s in sizes]))
+        step = max(1, total // max_checked)
+        spread = zip(*np.unravel_index(np.arange(0, total, step), sizes), strict=True)
+        cells = sorted(corners | {tuple(int(i) for i in c) for c in spread})
     base = parse_case_text(case_text)
     target = _VALIDATORS.get(base.model)
     for cell in cells:
@@ -133,31 +146,78 @@ def validate_cells(case_text: str, case_path, axes: list[Axis], max_checked: int
                                 + ")") from None
 
 
-def summary_numbers(summary: dict) -> dict:
-    """Numeric entries of a summary (scalars, fixed-length numeric lists); steady_state as
-    its code in :data:`STEADY_CODES`; wall times and metadata left out."""
-    out = {}
+_COUNTED = ("slipping_nodes", "permanently_stuck_nodes", "separating_nodes")
+
+
+def summary_numbers(summary: dict, flags: Mapping[str, tuple] | None = None
+                    ) -> CellOutputs:
+    """The entries of a summary that a sweep stores, with their attributes.
+
+    Parameters
+    ----------
+    summary : dict
+        A model's summary (``RunOutputs.summary``); its ``units`` map gives the unit of
+        each numeric entry.
+    flags : mapping, optional
+        ``RunOutputs.flags``: categorical entry -> every word it can take.
+
+    Returns
+    -------
+    CellOutputs
+        Scalars and fixed-length numeric lists as numbers; a categorical entry listed in
+        ``flags`` as the position of its word (attributes ``flag_values``,
+        ``flag_meanings``); any other text entry as text; lists of node indices as their
+        count ``n_<key>``. ``attrs[name]["units"]`` is the summary's unit of the entry,
+        absent where the model gives none. Wall times, metadata, ``model`` and
+        ``n_nodes`` are left out.
+
+    Raises
+    ------
+    ValueError
+        If a categorical entry holds a word its ``flags`` do not list (a model defect:
+        storing it would give a wrong code).
+    """
+    flags = dict(flags or {})
+    units = summary.get("units") if isinstance(summary.get("units"), Mapping) else {}
+    out, attrs = {}, {}
     for k, v in summary.items():
-        if "wall_time" in k or k in ("metadata", "n_nodes"):
+        if "wall_time" in k or k in ("metadata", "n_nodes", "units", "model"):
             continue
-        if k == "steady_state" and isinstance(v, str):
-            out[k] = STEADY_CODES.index(v) if v in STEADY_CODES else len(STEADY_CODES) - 1
+        if isinstance(v, str):
+            words = flags.get(k)
+            if words is None:
+                out[k] = v
+                continue
+            words = tuple(str(w) for w in words)
+            if v not in words:
+                raise ValueError(f"summary entry {k!r} is {v!r}, not one of the words the "
+                                 f"model lists for it: {', '.join(words)}")
+            if any(len(w.split()) != 1 for w in words):
+                raise ValueError(f"the words of {k!r} must be single blank-free words "
+                                 f"(CF flag_meanings), got {words}")
+            out[k] = np.int64(words.index(v))
+            attrs[k] = {"flag_values": list(range(len(words))),
+                        "flag_meanings": " ".join(words)}
+            continue
+        if k in _COUNTED and isinstance(v, list | tuple | np.ndarray):
+            out[f"n_{k}"] = len(v)
+            attrs[f"n_{k}"] = {"units": "1", "long_name": f"number of {k.replace('_', ' ')}"}
             continue
         if isinstance(v, bool | int | float | np.number | np.bool_):
             out[k] = float(v) if isinstance(v, float | np.floating) else v
-            continue
-        if isinstance(v, list | tuple | np.ndarray):
+        elif isinstance(v, list | tuple | np.ndarray):
             try:
                 arr = np.asarray(v, dtype=float)
             except (TypeError, ValueError):
                 continue
-            if arr.ndim == 1 and arr.size and k not in ("slipping_nodes",
-                                                        "permanently_stuck_nodes",
-                                                        "separating_nodes"):
-                out[k] = arr
-            elif k in ("slipping_nodes", "permanently_stuck_nodes", "separating_nodes"):
-                out[f"n_{k}"] = len(v)
-    return out
+            if arr.ndim != 1 or not arr.size:
+                continue
+            out[k] = arr
+        else:
+            continue
+        if k in units and units[k] is not None:
+            attrs.setdefault(k, {})["units"] = str(units[k])
+    return CellOutputs(out, attrs)
 
 
 def case_task(params: dict, case_text: str, case_path) -> dict:
@@ -168,7 +228,7 @@ def case_task(params: dict, case_text: str, case_path) -> dict:
 
     case = _case_with(case_text, case_path, params)
     out = run_model(case)
-    return summary_numbers(out.summary)
+    return summary_numbers(out.summary, getattr(out, "flags", None))
 
 
 def make_task(case_text: str, case_path):

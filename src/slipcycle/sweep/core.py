@@ -21,6 +21,14 @@ with a tqdm progress bar (ETA). Only the calling process writes to the store. If
 raises, the cells already finished stay stored and the error propagates; ``resume=True``
 later computes only what is missing, giving results identical to an uninterrupted sweep.
 
+Trust: a sweep holds an exclusive lock on its store (:class:`lock_store`; a second sweep
+on it stops at once); a store is marked created only once all its arrays exist, and
+temporary files of writes a kill interrupted are removed on resume, so a sweep killed at
+any moment resumes to the same results; local worker processes die with the process that
+started them (:func:`_die_with_parent`); grids of more than :data:`MAX_CELLS` cells and
+unreachable Dask schedulers are refused before anything is created. A task may return
+:class:`CellOutputs` to describe its outputs (units, CF flags), stored on the arrays.
+
 Performance notes (measured on the 2-core reference machine, ``benchmarks/
 bench_shakedown.py``): a spawned worker pays its imports, case validation and Numba cache
 loading once (≈ 2 s for a 200-node discrete case); each local worker gets
@@ -34,11 +42,16 @@ a sequential algorithm (the λ3/λ4 bisection of ``slipcycle shakedown``).
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import itertools
 import json
 import math
 import os
+import re
+import shutil
+import sys
+import threading
 from collections.abc import Callable, Mapping
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
@@ -47,7 +60,25 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["Axis", "SweepStore", "run_sweep", "SweepError", "fingerprint", "TaskRunner",
-           "run_group", "worker_threads"]
+           "run_group", "worker_threads", "CellOutputs", "lock_store", "check_size",
+           "connect_scheduler", "MAX_CELLS", "SCHEDULER_TIMEOUT_S"]
+
+#: most cells one sweep may have: a store keeps one Zarr chunk file per cell and output,
+#: and the sweep keeps a few hundred bytes of bookkeeping per cell in memory
+MAX_CELLS = 1_000_000
+
+#: bytes of memory per cell that a sweep needs at least (index tuples, task lists, the
+#: ``done`` flags and one float per output read back at the end, for a handful of outputs)
+_BYTES_PER_CELL = 400
+
+#: seconds to wait for a Dask scheduler to answer before giving up
+SCHEDULER_TIMEOUT_S = 5.0
+
+#: name of the lock file inside a store (present only while a sweep runs on it)
+LOCK_NAME = ".slipcycle.lock"
+
+#: temporary files Zarr writes before renaming them into place (left by a killed write)
+_ZARR_PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
 
 
 class SweepError(ValueError):
@@ -83,6 +114,30 @@ def _to_jsonable(v):
     return v
 
 
+class CellOutputs(dict):
+    """One cell's outputs (name -> number or fixed-shape array), with ``attrs``: output
+    name -> attributes describing it (``units``, CF ``flag_values``/``flag_meanings``).
+
+    A task may return a plain dict; attributes, when given, are stored on the store's
+    arrays and every cell must give the same ones.
+    """
+
+    def __init__(self, values=(), attrs: Mapping | None = None):
+        super().__init__(values)
+        self.attrs = {k: dict(v) for k, v in (attrs or {}).items()}
+
+    def __reduce__(self):
+        # picklable for process pools and Dask, attributes included
+        return (CellOutputs, (dict(self), self.attrs))
+
+
+def _jsonable_attrs(attrs: Mapping) -> dict:
+    return json.loads(json.dumps({k: dict(v) for k, v in attrs.items()}, default=_to_jsonable))
+
+
+_TEXT = "text"
+
+
 class SweepStore:
     """The Zarr group of one sweep.
 
@@ -93,6 +148,11 @@ class SweepStore:
     axes : list of Axis
     fingerprint : str
         Identifies the computation; a store with another fingerprint is not resumed.
+
+    Notes
+    -----
+    The group's ``fingerprint`` attribute is written last when a store is created, so a
+    store without it is one whose creation was interrupted (no cell of it is done).
     """
 
     def __init__(self, path, axes: list[Axis], fingerprint: str):
@@ -104,10 +164,33 @@ class SweepStore:
         self.shape = tuple(a.size for a in self.axes)
         self._zarr = zarr
         self.group = None
+        self._schema = None
 
     # -- creation / opening ---------------------------------------------------------------
+    def state(self) -> str:
+        """``"absent"``, ``"empty"`` (only a lock file or temporary files: a sweep killed
+        before its first cell), ``"partial"`` (creation interrupted), ``"complete"`` or
+        ``"foreign"`` (something else)."""
+        if not self.path.exists():
+            return "absent"
+        if not self.path.is_dir():
+            return "foreign"
+        meta = self.path / "zarr.json"
+        if not meta.exists() and not (self.path / ".zgroup").exists():
+            names = [p.name for p in self.path.iterdir()]
+            ok = all(n == LOCK_NAME or _ZARR_PARTIAL.search(n) for n in names)
+            return "empty" if ok else "foreign"
+        try:
+            attrs = dict(self._zarr.open_group(str(self.path), mode="r").attrs)
+        except Exception:  # noqa: BLE001 - unreadable metadata: not a store of ours
+            return "foreign"
+        if "fingerprint" in attrs:
+            return "complete"
+        return "partial" if attrs.get("slipcycle_sweep") == "creating" else "foreign"
+
     def exists(self) -> bool:
-        return (self.path / "zarr.json").exists() or (self.path / ".zgroup").exists()
+        """Whether a complete store (created, possibly with missing cells) is there."""
+        return self.state() == "complete"
 
     def open_existing(self) -> None:
         """Open for resuming; checks axes and fingerprint."""
@@ -115,29 +198,66 @@ class SweepStore:
         attrs = dict(g.attrs)
         if attrs.get("fingerprint") != self.fp:
             raise SweepError("--resume", f"the store {self.path} holds a different sweep "
-                             "(case, --set values or settings changed); use a new --store")
+                             "(case, --set values or settings changed); use a new --out")
         self.group = g
 
-    def create(self, schema: Mapping[str, tuple], attrs: Mapping | None = None) -> None:
-        """Create the arrays: ``schema`` maps output name to (cell_shape, dtype)."""
-        g = self._zarr.open_group(str(self.path), mode="w")
+    def clear(self) -> None:
+        """Remove everything but the lock file (an interrupted creation, left-over Zarr
+        temporary files); only while holding the lock."""
+        for p in self.path.iterdir():
+            if p.name == LOCK_NAME:
+                continue
+            if p.is_dir() and not p.is_symlink():
+                shutil.rmtree(p)
+            else:
+                p.unlink()
+
+    def remove_partials(self) -> int:
+        """Delete temporary files of Zarr writes that a killed sweep left; only while
+        holding the lock. Returns how many."""
+        n = 0
+        for root, _, files in os.walk(self.path):
+            for f in files:
+                if _ZARR_PARTIAL.search(f):
+                    os.unlink(os.path.join(root, f))
+                    n += 1
+        return n
+
+    def create(self, schema: Mapping[str, tuple], attrs: Mapping | None = None,
+               output_attrs: Mapping | None = None) -> None:
+        """Create the arrays: ``schema`` maps output name to (cell_shape, dtype);
+        ``output_attrs`` maps output name to its attributes (units, flags)."""
+        self.path.mkdir(parents=True, exist_ok=True)
+        # mode "a", not "w": "w" would delete the lock file held in the directory
+        g = self._zarr.open_group(str(self.path), mode="a",
+                                  attributes={"slipcycle_sweep": "creating"})
         nd = len(self.shape)
+        oattrs = _jsonable_attrs(output_attrs or {})
         for name, (cshape, dtype) in schema.items():
             cshape = tuple(cshape)
-            dtype = np.dtype(dtype)
-            fill = np.nan if dtype.kind == "f" else (False if dtype.kind == "b" else -1)
-            self._create(g, name, self.shape + cshape, (1,) * nd + (cshape or ()), dtype, fill)
+            if _is_text(dtype):
+                dt, fill = str, ""
+            else:
+                dt = np.dtype(dtype)
+                fill = np.nan if dt.kind == "f" else (False if dt.kind == "b" else -1)
+            self._create(g, name, self.shape + cshape, (1,) * nd + (cshape or ()), dt, fill)
+            if oattrs.get(name):
+                g[name].attrs.update(oattrs[name])
         self._create(g, "done", self.shape, (1,) * nd, np.dtype(bool), False)
         for a in self.axes:
             vals = np.asarray(a.values)
             if vals.dtype.kind in "fiub":
                 self._create(g, f"axis_{a.name}", vals.shape, vals.shape, vals.dtype, 0)
                 g[f"axis_{a.name}"][...] = vals
+        # the fingerprint last: its presence marks a completely created store
         g.attrs.update({
-            "fingerprint": self.fp,
             "axes": [[a.name, [_to_jsonable(v) for v in a.values]] for a in self.axes],
-            "schema": {k: [list(v[0]), np.dtype(v[1]).str] for k, v in schema.items()},
+            "schema": {k: [list(v[0]), _TEXT if _is_text(v[1]) else np.dtype(v[1]).str]
+                       for k, v in schema.items()},
+            "output_attrs": oattrs,
             **(dict(attrs) if attrs else {}),
+            "slipcycle_sweep": "created",
+            "fingerprint": self.fp,
         })
         self.group = g
 
@@ -153,13 +273,36 @@ class SweepStore:
     # -- cells ------------------------------------------------------------------------------
     @property
     def schema(self) -> dict:
-        return {k: (tuple(v[0]), np.dtype(v[1])) for k, v in self.group.attrs["schema"].items()}
+        if self._schema is None:
+            self._schema = {k: (tuple(v[0]), _TEXT if v[1] == _TEXT else np.dtype(v[1]))
+                            for k, v in self.group.attrs["schema"].items()}
+        return self._schema
+
+    @property
+    def output_attrs(self) -> dict:
+        """Output name -> its attributes (units, CF flags) as the task described them."""
+        return dict(self.group.attrs.get("output_attrs", {}))
+
+    def check_attrs(self, result) -> None:
+        """Refuse a cell whose output attributes differ from the store's (a model that
+        changes the meaning of an output between cells)."""
+        given = getattr(result, "attrs", None)
+        if not given:
+            return
+        if not hasattr(self, "_attrs_cache"):
+            self._attrs_cache = self.output_attrs
+        new = _jsonable_attrs(given)
+        for name, at in new.items():
+            if name in self.schema and self._attrs_cache.get(name, {}) != at:
+                raise ValueError(f"sweep output {name!r}: attributes {at} differ from the "
+                                 f"store's {self._attrs_cache.get(name, {})}")
 
     def done(self) -> np.ndarray:
         return np.asarray(self.group["done"][...], bool)
 
     def write(self, index: tuple, result: Mapping) -> None:
         """Write one cell's outputs, then mark it done."""
+        self.check_attrs(result)
         for name, (cshape, dtype) in self.schema.items():
             if name not in result:
                 continue
@@ -175,6 +318,8 @@ class SweepStore:
         if len(indices) == 1:
             self.write(indices[0], results[0])
             return
+        for r in results:
+            self.check_attrs(r)
         idx = np.array(indices)
         lo, hi = idx.min(axis=0), idx.max(axis=0)
         box = tuple(int(h - l + 1) for l, h in zip(lo, hi, strict=True))
@@ -191,19 +336,28 @@ class SweepStore:
                     if name in r:
                         self._write_one(name, i, r[name], cshape, dtype)
                 continue
-            block = np.empty(box + cshape, dtype)
+            block = np.empty(box + cshape, object if _is_text(dtype) else dtype)
             for k, r in enumerate(results):
                 block[tuple(p[k] for p in pos)] = _checked(name, indices[k], r[name], cshape,
                                                            dtype)
-            self.group[name][sel] = block
+            self.group[name][sel] = block.astype(str) if _is_text(dtype) else block
         self.group["done"][sel] = np.ones(box, bool)
 
     def _write_one(self, name, index, value, cshape, dtype):
         self.group[name][index] = _checked(name, index, value, cshape, dtype)
 
     def read(self) -> dict:
-        """All outputs as NumPy arrays (missing cells hold the fill value)."""
-        return {name: np.asarray(self.group[name][...]) for name in self.schema}
+        """All outputs as NumPy arrays (missing cells hold the fill value; text as
+        fixed-width unicode)."""
+        out = {}
+        for name, (_, dtype) in self.schema.items():
+            arr = np.asarray(self.group[name][...])
+            out[name] = arr.astype(str) if _is_text(dtype) else arr
+        return out
+
+
+def _is_text(dtype) -> bool:
+    return isinstance(dtype, str) and dtype == _TEXT
 
 
 def _checked(name, index, value, cshape, dtype) -> np.ndarray:
@@ -212,6 +366,14 @@ def _checked(name, index, value, cshape, dtype) -> np.ndarray:
     if val.shape != cshape:
         raise ValueError(f"output {name!r} of cell {index}: shape {val.shape}, "
                          f"expected {cshape}")
+    if _is_text(dtype):
+        if val.dtype.kind not in "UT":
+            raise ValueError(f"output {name!r} of cell {index}: expected text, got "
+                             f"{val.dtype}")
+        return val.astype(str)
+    if val.dtype.kind not in "biuf":
+        raise ValueError(f"output {name!r} of cell {index}: expected a number, got "
+                         f"{val.dtype}")
     return val.astype(dtype)
 
 
@@ -227,8 +389,11 @@ def _schema_of(result: Mapping) -> dict:
     schema = {}
     for k, v in result.items():
         arr = np.asarray(v)
+        if arr.dtype.kind in "UT":
+            schema[k] = (arr.shape, _TEXT)
+            continue
         if arr.dtype.kind not in "biuf":
-            raise TypeError(f"sweep output {k!r} must be numeric, got {arr.dtype}")
+            raise TypeError(f"sweep output {k!r} must be numeric or text, got {arr.dtype}")
         dtype = np.float64 if arr.dtype.kind == "f" else (
             np.bool_ if arr.dtype.kind == "b" else np.int64)
         schema[k] = (arr.shape, dtype)
@@ -278,12 +443,48 @@ def worker_threads(workers: int) -> int:
     return max(1, usable_cores() // max(1, workers))
 
 
-def _worker_init(threads: int) -> None:
-    """Initializer of local worker processes: cap Numba's threads so that ``workers``
-    processes × threads do not oversubscribe the cores (``prange`` kernels)."""
+def _worker_init(threads: int, parent: int | None = None) -> None:
+    """Initializer of local worker processes.
+
+    Caps Numba's threads so that ``workers`` processes × threads do not oversubscribe the
+    cores (``prange`` kernels), and ties the worker's life to the sweep's process
+    ``parent``: a worker blocked on the task queue would otherwise outlive a killed
+    parent for ever (:func:`_die_with_parent`).
+    """
+    if parent is not None:
+        _die_with_parent(parent)
     import numba
 
     numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+
+
+def _die_with_parent(parent: int, poll_s: float = 0.5) -> None:
+    """End this process when ``parent`` ends.
+
+    On Linux the kernel sends SIGKILL at the parent's death (``prctl(PR_SET_PDEATHSIG)``);
+    a daemon thread that watches the parent's pid covers other systems and the moment
+    before the ``prctl`` call.
+    """
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+            import signal
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, signal.SIGKILL, 0, 0, 0)      # 1 = PR_SET_PDEATHSIG
+        except (OSError, AttributeError):               # pragma: no cover - no prctl
+            pass
+    if os.getppid() != parent:                          # the parent died already
+        os._exit(1)
+
+    def watch():
+        import time
+
+        while os.getppid() == parent:
+            time.sleep(poll_s)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="slipcycle-parent-watch", daemon=True).start()
 
 
 class _Writer:
@@ -368,23 +569,59 @@ def run_sweep(fn: Callable[[dict], Mapping], axes: list[Axis], store_path, *,
     main process only writes. Results do not depend on ``workers``, ``scheduler`` or
     ``group_by``: every cell is computed by the same call ``fn(params)``.
     """
+    check_size([a.size for a in axes], "sweep")
+    if workers is not None and int(workers) < 1:
+        raise SweepError("--workers", f"must be >= 1, got {workers}")
     if runner is not None:
         workers, scheduler = runner.workers, runner.scheduler
     fp = fingerprint({"description": description or {},
                       "axes": [[a.name, [_to_jsonable(v) for v in a.values]] for a in axes]})
     store = SweepStore(store_path, axes, fp)
+    if resume and not store.path.exists():
+        raise no_store_to_resume(store.path)
+    # connect before anything is created: an unreachable scheduler leaves nothing behind
+    client, own_client = None, False
+    if scheduler is not None:
+        if runner is not None:
+            client = runner.client()
+        else:
+            client, own_client = connect_scheduler(scheduler)
+    try:
+        with lock_store(store.path):
+            return _run_locked(fn, axes, store, resume=resume, workers=workers,
+                               client=client, progress=progress, stop_after=stop_after,
+                               attrs=attrs, description=description, desc=desc,
+                               group_by=group_by, runner=runner)
+    finally:
+        if own_client:
+            client.close()
+
+
+def no_store_to_resume(path) -> SweepError:
+    """The error of ``--resume`` where no sweep was ever started."""
+    return SweepError("--resume", f"there is no sweep store at {path} to resume; run "
+                      "without --resume to start the sweep")
+
+
+def _run_locked(fn, axes, store, *, resume, workers, client, progress, stop_after, attrs,
+                description, desc, group_by, runner) -> SweepStore:
+    """:func:`run_sweep` once the store is locked by this process."""
     cells = _cells(store.shape)
-    if store.exists():
+    state = store.state()
+    if state == "complete":
         if not resume:
-            raise SweepError("--store", f"{store.path} already exists; pass --resume to "
-                             "complete it or choose another directory")
+            raise SweepError("--out", f"{store.path} already holds a sweep; pass --resume "
+                             "to complete it or choose another --out")
         store.open_existing()
+        store.remove_partials()         # temporary files of writes a kill interrupted
         done = store.done()
         todo = [c for c in cells if not done[c]]
         first = None
+    elif state == "foreign":
+        raise SweepError("--out", f"{store.path} exists and is not a sweep store")
     else:
-        if store.path.exists() and any(store.path.iterdir()):
-            raise SweepError("--store", f"{store.path} exists and is not a sweep store")
+        # absent, or left by a sweep killed before its store was created: start afresh
+        store.clear()
         todo = cells
         first = cells[0]
     todo_run = todo if stop_after is None else todo[:max(int(first is not None), stop_after)]
@@ -393,13 +630,17 @@ def run_sweep(fn: Callable[[dict], Mapping], axes: list[Axis], store_path, *,
             "description": json.loads(json.dumps(description or {}, default=str))}
     bar = _progress(len(cells), progress, desc)
     bar.update(len(cells) - len(todo))
-    writer = _Writer(store, first, lambda res0: store.create(_schema_of(res0), meta), bar)
+
+    def create(res0):
+        store.create(_schema_of(res0), meta, getattr(res0, "attrs", None))
+
+    writer = _Writer(store, first, create, bar)
     try:
         if not tasks:
             return store
         nproc = workers or os.cpu_count() or 1
-        if scheduler is not None:
-            _run_dask(fn, axes, tasks, runner.client() if runner else scheduler, writer)
+        if client is not None:
+            _run_dask(fn, axes, tasks, client, writer)
         elif nproc <= 1 or len(tasks) == 1:
             for task in tasks:
                 writer.put(task, run_group(fn, [_params(axes, i) for i in task]))
@@ -413,6 +654,170 @@ def run_sweep(fn: Callable[[dict], Mapping], axes: list[Axis], store_path, *,
     return store
 
 
+def check_size(sizes, key: str = "--set") -> int:
+    """Refuse, before any work, a grid of more than :data:`MAX_CELLS` cells.
+
+    Parameters
+    ----------
+    sizes : sequence of int
+        Number of values of each axis.
+    key : str
+        The option named in the error.
+
+    Returns
+    -------
+    int
+        The number of cells.
+
+    Raises
+    ------
+    SweepError
+        Naming the cell count and an estimate of the memory the sweep would need.
+    """
+    cells = math.prod(int(s) for s in sizes)
+    if cells > MAX_CELLS:
+        raise SweepError(key, f"{cells} cells would need an estimated "
+                         f"{_human_bytes(cells * (_BYTES_PER_CELL + 8 * len(sizes)))} of "
+                         f"memory (and {cells} files per output); a sweep may have at most "
+                         f"{MAX_CELLS} cells: use fewer values")
+    return cells
+
+
+def _human_bytes(n: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if n < 1000 or unit == "PB":
+            return f"{n:.3g} {unit}"
+        n /= 1000
+    return f"{n:.3g} PB"  # pragma: no cover
+
+
+class _Lock:
+    def __init__(self, fd: int, path: Path, made: list[Path]):
+        self.fd, self.path, self.made, self.count = fd, path, made, 1
+
+
+_HELD: dict[str, _Lock] = {}
+
+
+class lock_store:  # noqa: N801 - used like a function: ``with lock_store(path):``
+    """Hold an exclusive lock on a sweep store for the duration of a ``with`` block.
+
+    A lock file inside the store is locked with ``fcntl.flock``; the kernel releases the
+    lock when the process ends, however it ends, so a killed sweep never blocks a later
+    ``--resume``. Another process asking for the same store fails at once with a
+    :class:`SweepError` naming the store; the same process may nest locks on one store.
+    On leaving the outermost block the lock file is removed, and so is the store
+    directory (with the parents this lock created) when it holds nothing but what a sweep
+    left before creating its store; other content is never touched.
+    """
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.key = os.path.realpath(self.path)
+
+    def __enter__(self):
+        held = _HELD.get(self.key)
+        if held is not None:
+            held.count += 1
+            return self
+        _HELD[self.key] = _acquire(self.path)
+        return self
+
+    def __exit__(self, *exc):
+        held = _HELD[self.key]
+        held.count -= 1
+        if held.count:
+            return
+        del _HELD[self.key]
+        try:
+            if SweepStore(self.path, [], "").state() not in ("empty", "partial"):
+                os.unlink(self.path / LOCK_NAME)    # a store, or someone else's files
+            else:                   # nothing worth keeping: leave no trace of this sweep
+                shutil.rmtree(self.path, ignore_errors=True)
+                for d in reversed(held.made[:-1]):
+                    try:
+                        d.rmdir()
+                    except OSError:
+                        break
+        except OSError:             # pragma: no cover - removed meanwhile
+            pass
+        finally:
+            os.close(held.fd)
+
+
+def _acquire(path: Path) -> _Lock:
+    import fcntl
+
+    lock = path / LOCK_NAME
+    for _ in range(20):
+        made = []
+        p = path
+        while not p.exists():
+            made.insert(0, p)
+            p = p.parent
+        path.mkdir(parents=True, exist_ok=True)
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        except FileNotFoundError:   # the directory was removed meanwhile: again
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            try:
+                pid = os.read(fd, 32).decode().strip()
+            finally:
+                os.close(fd)
+            by = f" (process {pid})" if pid.isdigit() else ""
+            raise SweepError("--out", f"the sweep store {path} is in use by another "
+                             f"sweep{by}; wait for it to end or choose another --out"
+                             ) from None
+        try:
+            same = os.stat(lock).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if not same:                # the holder removed the file as we opened it: again
+            os.close(fd)
+            continue
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        return _Lock(fd, path, made)
+    raise SweepError("--out", f"could not lock the sweep store {path}")  # pragma: no cover
+
+
+def connect_scheduler(address, timeout: float | None = None):
+    """A Dask client for ``address`` (or ``address`` itself if it is a client).
+
+    Returns
+    -------
+    (client, own) : own is True when this call connected (the caller closes it)
+
+    Raises
+    ------
+    SweepError
+        Naming ``--scheduler`` when the address is malformed or nothing answers within
+        ``timeout`` seconds (default :data:`SCHEDULER_TIMEOUT_S`).
+    """
+    if hasattr(address, "submit"):
+        return address, False
+    import dask
+    from distributed import Client
+
+    text = str(address).strip()
+    timeout = SCHEDULER_TIMEOUT_S if timeout is None else timeout
+    saved = copy.deepcopy(dask.config.config)
+    try:
+        client = Client(text, timeout=timeout)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        # a failed Client leaves "scheduler: dask.distributed" in the global config, which
+        # would send this process's later dask work (xarray writes) to no client
+        dask.config.config.clear()
+        dask.config.config.update(saved)
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise SweepError("--scheduler", f"cannot connect to a Dask scheduler at {text!r}: "
+                         f"{reason}") from None
+    return client, True
+
+
 def _local_pool(workers: int):
     """A ``spawn`` process pool whose workers share out the cores' Numba threads."""
     import multiprocessing as mp
@@ -420,7 +825,7 @@ def _local_pool(workers: int):
     # "spawn" avoids forking a process that holds Numba/Dask threads
     return ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
                                initializer=_worker_init,
-                               initargs=(worker_threads(workers),))
+                               initargs=(worker_threads(workers), os.getpid()))
 
 
 def _run_pool(fn, axes, tasks, workers, writer, pool):
@@ -469,30 +874,24 @@ def _salvage(writer, first_fut, task_of):
     writer.put(task_of[first_fut], res)
 
 
-def _run_dask(fn, axes, tasks, scheduler, writer):
-    from distributed import Client, as_completed
+def _run_dask(fn, axes, tasks, client, writer):
+    from distributed import as_completed
 
-    own = not hasattr(scheduler, "submit")      # an address: connect, and close after
-    client = Client(scheduler) if own else scheduler
+    futures = {}
+    first_fut = None
+    for task in tasks:
+        fut = client.submit(run_group, fn, [_params(axes, i) for i in task], pure=False)
+        futures[fut] = task
+        if writer.first in task:
+            first_fut = fut
     try:
-        futures = {}
-        first_fut = None
-        for task in tasks:
-            fut = client.submit(run_group, fn, [_params(axes, i) for i in task], pure=False)
-            futures[fut] = task
-            if writer.first in task:
-                first_fut = fut
-        try:
-            for fut in as_completed(list(futures)):
-                writer.put(futures[fut], fut.result())
-        except BaseException as exc:
-            client.cancel([f for f in futures if f is not first_fut])
-            if not isinstance(exc, KeyboardInterrupt):
-                _salvage(writer, first_fut, futures)
-            raise
-    finally:
-        if own:
-            client.close()
+        for fut in as_completed(list(futures)):
+            writer.put(futures[fut], fut.result())
+    except BaseException as exc:
+        client.cancel([f for f in futures if f is not first_fut])
+        if not isinstance(exc, KeyboardInterrupt):
+            _salvage(writer, first_fut, futures)
+        raise
 
 
 class TaskRunner:
@@ -505,6 +904,8 @@ class TaskRunner:
     """
 
     def __init__(self, workers: int | None = None, scheduler=None):
+        if workers is not None and int(workers) < 1:
+            raise SweepError("--workers", f"must be >= 1, got {workers}")
         self.workers = workers or os.cpu_count() or 1
         self.scheduler = scheduler
         self._pool = None
@@ -528,10 +929,7 @@ class TaskRunner:
     def client(self):
         """The Dask client (connected on first use)."""
         if self._client is None:
-            from distributed import Client
-
-            self._own_client = not hasattr(self.scheduler, "submit")
-            self._client = Client(self.scheduler) if self._own_client else self.scheduler
+            self._client, self._own_client = connect_scheduler(self.scheduler)
         return self._client
 
     def pool(self) -> ProcessPoolExecutor:
@@ -578,6 +976,7 @@ def parse_values(spec: str, key: str) -> list:
             num = int(parts[2])
             if num < 1:
                 raise SweepError(f"--set {key}", f"num must be >= 1, got {num}")
+            check_size([num], f"--set {key}")     # before allocating the values
             vals = np.linspace(start, stop, num).tolist()
             if all("." not in p and "e" not in p.lower() for p in parts[:2]) and all(
                     float(v).is_integer() for v in vals):
