@@ -153,3 +153,33 @@ def test_base_install_names_the_extra_a_command_needs_and_runs_the_rest(tmp_path
     run = _base_install(["run", "case.toml", "--out", "r", "--quiet"], tmp_path)
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "r" / "summary.json").exists()
+
+
+@pytest.mark.parametrize("example", ["halfspace_sphere.toml", "discrete_two_node.toml",
+                                     "rods_spec.toml", "halfspace_rough_map.toml"])
+def test_every_model_refuses_sizes_against_one_memory_budget(example, tmp_path, monkeypatch,
+                                                             capsys):
+    monkeypatch.setenv("SLIPCYCLE_MEMORY_LIMIT", "10kB")
+    command = "map" if "map" in example else "run"
+    code = main([command, str(EXAMPLES / example), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and "of memory (limit 10 kB)" in err, err
+    assert err.count("\n") == 1 and not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("text", "nbytes"), [("32GB", 32e9), ("500 MB", 5e8), ("2GiB", 2**31),
+                                              ("5e9", 5e9), ("", 4e9)])
+def test_memory_budget_reads_sizes_from_the_environment(text, nbytes, monkeypatch):
+    from slipcycle.io.sizes import memory_limit
+
+    monkeypatch.setenv("SLIPCYCLE_MEMORY_LIMIT", text)
+    assert memory_limit() == nbytes
+
+
+def test_malformed_memory_budget_is_one_line_naming_the_variable(tmp_path, monkeypatch,
+                                                                 capsys):
+    monkeypatch.setenv("SLIPCYCLE_MEMORY_LIMIT", "lots")
+    code = main(["run", str(EXAMPLES / "halfspace_sphere.toml"), "--out",
+                 str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("error: SLIPCYCLE_MEMORY_LIMIT: ")

@@ -117,7 +117,7 @@ def test_rods_case_in_shakedown_or_basins_names_the_commands_that_serve_it(run_c
 
 def _memory_refusal(code, err, key):
     line = _one_line_error(code, err, key)
-    assert re.search(r"need about [\d.e+]+ [kMGT]?B of memory \(limit 4 GB\)", line), line
+    assert re.search(r"need about [\d.e+]+ [kMGTPE]?B of memory \(limit 4 GB\)", line), line
 
 
 def test_steps_per_cycle_1e9_is_refused_with_its_memory(write_case, run_cli, tmp_path):

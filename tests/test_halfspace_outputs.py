@@ -182,7 +182,8 @@ def test_sizes_that_cannot_be_allocated_are_refused_up_front(run_cli, write_case
     assert not out.exists()
     if key == "run.steps_per_cycle" and cmd == "run":   # the example quoted in the docs
         assert err.strip() == ("error: run.steps_per_cycle: 1000000000 steps per cycle need "
-                               "about 64.4 TB of memory (limit 4 GB); reduce steps_per_cycle")
+                               "about 64.4 TB of memory (limit 4 GB); reduce steps_per_cycle "
+                               "(SLIPCYCLE_MEMORY_LIMIT sets the limit)")
 
 
 BLAME = [

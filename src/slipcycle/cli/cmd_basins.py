@@ -247,8 +247,8 @@ def execute(args: argparse.Namespace) -> int:
         summary["box_counting"] = bc
         summary["grid"] = [int(args.grid), int(args.grid)]
         ds = xr.Dataset(
-            {"steady_state": (("v2", "v1"), cls, {"units": "1", "flag_meanings":
-                                                  " ".join(STEADY_CODES)}),
+            {"steady_state": (("v2", "v1"), cls, {"units": "1", "flag_values": list(range(
+                len(STEADY_CODES))), "flag_meanings": " ".join(STEADY_CODES)}),
              "dissipation_per_cycle": (("v2", "v1"), D, {"units": "J"}),
              "dissipation_per_node": (("v2", "v1", "node"), data["dissipation_per_node"],
                                       {"units": "J"}),
@@ -260,7 +260,13 @@ def execute(args: argparse.Namespace) -> int:
                     "v2": ("v2", v2, {"units": "m", "long_name": "initial slip of node 1"})})
         figures["basin_map"] = lambda: basin_map(v1, v2, cls, D, region, lam)
     else:
-        ds = store_dataset(store, axes)
+        codes = list(range(len(STEADY_CODES)))
+        ds = store_dataset(store, axes, attrs={
+            "steady_state": {"units": "1", "flag_values": codes,
+                             "flag_meanings": " ".join(STEADY_CODES)},
+            "dissipation_per_cycle": {"units": "J"}, "dissipation_per_node": {"units": "J"},
+            "cycles_run": {"units": "1"}, "n_slipping": {"units": "1"},
+            "memory_erased": {"units": "1"}})
         ds["converged"] = (tuple(ds["steady_state"].dims), converged, CONVERGED_ATTRS)
     write_outputs(args.out, RunOutputs(summary=summary, dataset=ds, figures=figures,
                                        flags=dict(SUMMARY_FLAGS)),

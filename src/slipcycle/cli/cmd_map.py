@@ -26,9 +26,6 @@ def add_parser(sub) -> None:
     p.set_defaults(execute=execute)
 
 
-#: memory the map may plan to use (see :func:`map_memory_estimate`)
-MEMORY_LIMIT_BYTES = 4e9
-
 
 def map_memory_estimate(n_points: int, steps_per_cycle: int, n_sliders: int,
                         threads: int | None = None) -> float:
@@ -45,6 +42,7 @@ def map_memory_estimate(n_points: int, steps_per_cycle: int, n_sliders: int,
 def parse_map_case(case):
     """Grid and settings of a map case (raises CaseError)."""
     from slipcycle.io import CaseError
+    from slipcycle.io.sizes import check_memory, memory_limit
 
     if "map" not in case.data:
         raise CaseError("map", "required table [map] is missing; a half-space case without a "
@@ -57,16 +55,12 @@ def parse_map_case(case):
     fig_P1 = sec.float("fig7_P1_hat", 0.4, ge=0.0, lt=1.0)
     fig_Q1 = np.atleast_1d(sec.array("fig7_Q1_hat", [0.2, 0.4, 0.6, 0.8], ge=0.0, le=1.0))
     run = case.section("run", required=False)
-    for key in ("steps_per_cycle", "sliders"):   # counts written as 1e9 are still counts
-        raw = run.data.get(key)
-        if isinstance(raw, float) and raw.is_integer():
-            run.data[key] = int(raw)
     settings = {"steps_per_cycle": run.int("steps_per_cycle", 200, ge=16),
                 "n_sliders": run.int("sliders", 100, ge=10)}
     sizes = {"map.P1_hat": P1.size, "map.Q1_hat": Q1.size, "map.phase": ph.size}
     n_points = P1.size * Q1.size * ph.size
     need = map_memory_estimate(n_points, settings["steps_per_cycle"], settings["n_sliders"])
-    if need > MEMORY_LIMIT_BYTES:
+    if need > memory_limit():
         # blame what asks most: the grid axis with most points, or a [run] count
         asks = {"run.steps_per_cycle": settings["steps_per_cycle"] / 200,
                 "run.sliders": settings["n_sliders"] / 100,
@@ -75,21 +69,13 @@ def parse_map_case(case):
         what = {"run.steps_per_cycle": f"{settings['steps_per_cycle']} steps per cycle",
                 "run.sliders": f"{settings['n_sliders']} sliders"}.get(
                     key, f"a grid of {n_points} points")
-        raise CaseError(key, f"{what} need about {_bytes(need)} of memory (limit "
-                        f"{_bytes(MEMORY_LIMIT_BYTES)})")
+        check_memory(key, need, what)
     # a run case may carry a [map] table: its physical tables are accepted, not used
     for name in ("halfspace", "loading"):
         if name in case.data:
             case.section(name).ignore()
     case.finish()
     return P1, Q1, ph, fig_P1, fig_Q1, settings
-
-
-def _bytes(b: float) -> str:
-    for unit, size in (("EB", 1e18), ("PB", 1e15), ("TB", 1e12), ("GB", 1e9)):
-        if b >= 0.1 * size:
-            return f"{b / size:.3g} {unit}"
-    return f"{b / 1e6:.3g} MB"
 
 
 def execute(args: argparse.Namespace) -> int:

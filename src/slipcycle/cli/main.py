@@ -92,8 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     """
     import os
 
-    from slipcycle.errors import SolverError
-    from slipcycle.io import CaseError
+    from slipcycle.errors import InputError, SolverError
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -101,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
         _check_extras(args)
         _check_outputs(args)
         return int(args.execute(args) or 0)
-    except CaseError as exc:
+    except InputError as exc:
         print(f"error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except SolverError as exc:

@@ -176,15 +176,6 @@ def _initial_state_error(sec: Section, ld: Section, exc, r0: np.ndarray, n: int)
     return sec.error("initial_slip", f"inadmissible at θ = 0: {exc}")
 
 
-def _count(sec: Section, key: str, default: int, ge: int) -> int:
-    """An integer count; an integral float (``1e6``) is accepted, so that its size can be
-    judged (refused with the memory it needs) rather than its spelling."""
-    raw = sec.data.get(key, default)
-    if isinstance(raw, float) and raw.is_integer():
-        sec.data[key] = int(raw)
-    return sec.int(key, default, ge=ge)
-
-
 def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     """Read and validate every key of a discrete case; no computation beyond checks.
 
@@ -247,8 +238,8 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
 
     rn = case.section("run", required=False)
     run = {
-        "cycles": _count(rn, "cycles", 40, ge=1),
-        "steps_per_cycle": _count(rn, "steps_per_cycle", 100, ge=1),
+        "cycles": rn.int("cycles", 40, ge=1),
+        "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1),
         "tol": rn.float("tolerance", 1e-8, gt=0.0, lt=1.0),
         "min_cycles": rn.int("min_cycles", 1, ge=1),
     }

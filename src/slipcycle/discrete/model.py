@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from slipcycle.errors import InputError
+
 __all__ = ["FrictionalSystem", "ModelError", "STICK", "SLIP_POS", "SLIP_NEG", "SEPARATED",
            "STATE_NAMES"]
 
@@ -26,13 +28,13 @@ STICK, SLIP_POS, SLIP_NEG, SEPARATED = 0, 1, 2, 3
 STATE_NAMES = ("stick", "slip_positive", "slip_negative", "separated")
 
 
-class ModelError(ValueError):
-    """An invalid model. ``name`` is the matrix or parameter at fault (``"A"``, ``"friction"``)."""
+class ModelError(InputError):
+    """An invalid model. ``name`` (= ``key``) is the matrix or parameter at fault (``"A"``,
+    ``"friction"``)."""
 
     def __init__(self, name: str, problem: str):
+        super().__init__(name, problem)
         self.name = name
-        self.problem = problem
-        super().__init__(f"{name}: {problem}")
 
 
 def _square(name: str, M, n: int | None) -> np.ndarray:

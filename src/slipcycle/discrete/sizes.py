@@ -9,13 +9,10 @@ right to within a small factor to tell a feasible size from one that would exhau
 
 from __future__ import annotations
 
-from slipcycle.io import CaseError
+from slipcycle.io.sizes import MEMORY_LIMIT, check_memory, format_bytes
 
 __all__ = ["MEMORY_LIMIT", "check_memory", "format_bytes", "run_bytes", "system_bytes",
            "cells_bytes", "count_option"]
-
-#: largest estimated memory of one analysis [bytes] (4 GB)
-MEMORY_LIMIT = 4.0e9
 
 #: bytes per node and load sample of a recorded run: x, r (2N float64 each) in the result
 #: and again in the Dataset, friction limit, node modes (int8, twice)
@@ -24,27 +21,6 @@ _RECORD_BYTES_PER_NODE_SAMPLE = 8 * (2 + 2) * 2 + 8 + 2
 #: bytes per stored cell of a sweep-like analysis besides its per-node arrays: the Python
 #: record in the main process, the Zarr chunk buffers and the Dataset copy
 _CELL_BYTES = 2048
-
-
-def format_bytes(nbytes: float) -> str:
-    """``nbytes`` as a short decimal size ("80 GB", "512 MB")."""
-    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if nbytes >= size:
-            return f"{nbytes / size:.3g} {unit}"
-    return f"{nbytes:.0f} B"
-
-
-def check_memory(key: str, nbytes: float, what: str, limit: float = MEMORY_LIMIT) -> None:
-    """Refuse a size whose estimated memory exceeds ``limit``.
-
-    Raises
-    ------
-    CaseError
-        ``key: <what> need about <size> of memory (limit 4 GB)``.
-    """
-    if nbytes > limit:
-        raise CaseError(key, f"{what} need about {format_bytes(nbytes)} of memory (limit "
-                             f"{format_bytes(limit)})")
 
 
 def system_bytes(n_nodes: int) -> float:

@@ -175,19 +175,8 @@ PROFILE_KEYS = {
     "tabulated": {"table_U", "table_P", "compliance_ratio"},
 }
 
-#: memory a run may plan to use; larger requests are refused before any work
-MEMORY_LIMIT_BYTES = 4e9
-
 _DEFAULT_SLIDERS = 2000
 _DEFAULT_STEPS = 400
-
-
-def _count(sec: Section, key: str, default: int, lo: int, hi: float | None = None) -> int:
-    """A whole number; 1e7 written as a float is accepted (it is a count, not a value)."""
-    raw = sec.data.get(key, default)
-    if isinstance(raw, float) and raw.is_integer():
-        sec.data[key] = raw = int(raw)
-    return sec.int(key, default, ge=lo, le=hi)
 
 
 def parse_case(case: Case) -> HalfspaceModel:
@@ -206,14 +195,14 @@ def parse_case(case: Case) -> HalfspaceModel:
     friction = sec.float("friction", gt=0.0)
     normal, tangential, ncontrol, tcontrol, protocol = _loading(case.section("loading"))
     run = case.section("run", required=False)
-    steps = _count(run, "steps_per_cycle", _DEFAULT_STEPS, 8)
+    steps = run.int("steps_per_cycle", _DEFAULT_STEPS, ge=8)
     model = HalfspaceModel(
         profile=profile, elasticity=elasticity, friction=friction, compliance_ratio=ratio,
         normal=normal, tangential=tangential, normal_control=ncontrol,
         tangential_control=tcontrol, protocol=protocol, steps_per_cycle=steps,
-        max_cycles=_count(run, "cycles", 5, 1, 10000),
-        n_sliders=_count(run, "sliders", _DEFAULT_SLIDERS, 10),
-        assembly_steps=_count(run, "assembly_steps", max(steps // 4, 10), 1),
+        max_cycles=run.int("cycles", 5, ge=1, le=10000),
+        n_sliders=run.int("sliders", _DEFAULT_SLIDERS, ge=10),
+        assembly_steps=run.int("assembly_steps", max(steps // 4, 10), ge=1),
         snapshots=np.atleast_1d(run.array("snapshots", [0.0, np.pi / 2, np.pi, 1.5 * np.pi],
                                           ge=0.0, le=2 * np.pi)),
         steady_tol=run.float("steady_tol", 1e-9, gt=0.0, lt=1.0),
@@ -241,18 +230,13 @@ def memory_estimate(model: HalfspaceModel) -> float:
     return n * per_slider + 100.0 * n_steps
 
 
-def _gb(b: float) -> str:
-    """Bytes in words: '80 GB', '64 TB'."""
-    for unit, size in (("EB", 1e18), ("PB", 1e15), ("TB", 1e12), ("GB", 1e9)):
-        if b >= 0.1 * size:
-            return f"{b / size:.3g} {unit}"
-    return f"{b / 1e6:.3g} MB"
-
-
-def check_memory(model: HalfspaceModel, limit: float = MEMORY_LIMIT_BYTES) -> None:
+def check_memory(model: HalfspaceModel, limit: float | None = None) -> None:
     """Refuse (CaseError naming the key that asks most) runs that would not fit in memory."""
+    from slipcycle.io.sizes import check_memory as check
+    from slipcycle.io.sizes import memory_limit
+
     need = memory_estimate(model)
-    if need <= limit:
+    if need <= (memory_limit() if limit is None else limit):
         return
     ratios = {
         "run.sliders": (model.n_sliders / _DEFAULT_SLIDERS, f"{model.n_sliders} sliders"),
@@ -263,8 +247,7 @@ def check_memory(model: HalfspaceModel, limit: float = MEMORY_LIMIT_BYTES) -> No
         "run.cycles": (model.max_cycles / 5, f"{model.max_cycles} cycles"),
     }
     key = max(ratios, key=lambda k: ratios[k][0])
-    raise CaseError(key, f"{ratios[key][1]} need about {_gb(need)} of memory "
-                    f"(limit {_gb(limit)}); reduce {key.split('.')[1]}")
+    check(key, need, ratios[key][1], limit, advice=f"reduce {key.split('.')[1]}")
 
 
 def _check_physics(case: Case, model: HalfspaceModel) -> None:

@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from slipcycle.errors import InputError
+
 __all__ = ["Case", "CaseError", "Section", "read_case", "parse_case_text", "MODEL_COMMANDS"]
 
 #: which commands serve which ``model`` (used to say where a case belongs)
@@ -36,13 +38,8 @@ MAX_CASE_BYTES = 64 * 1024 * 1024
 _MISSING = object()
 
 
-class CaseError(ValueError):
+class CaseError(InputError):
     """A case file is invalid. ``key`` is the dotted path of the offending key."""
-
-    def __init__(self, key: str, problem: str):
-        self.key = key
-        self.problem = problem
-        super().__init__(f"{key}: {problem}" if key else problem)
 
 
 def _join(prefix: str, key: str) -> str:

@@ -22,19 +22,16 @@ from pathlib import Path
 
 import numpy as np
 
+from slipcycle.errors import InputError
+
 __all__ = ["read_stiffness", "stiffness_nodes", "split_stiffness", "check_stiffness",
            "mtx_dof_order", "StiffnessError", "DOF_ORDERS"]
 
 DOF_ORDERS = ("tangential_first", "interleaved")
 
 
-class StiffnessError(ValueError):
+class StiffnessError(InputError):
     """A reduced stiffness file is inconsistent; ``key`` names the offending array."""
-
-    def __init__(self, key: str, problem: str):
-        self.key = key
-        self.problem = problem
-        super().__init__(f"{key}: {problem}")
 
 
 def _resolve_order(stated: str | None, given: str | None, where: str) -> str:

@@ -20,14 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from slipcycle.io import Case, CaseError, RunOutputs, Section
+from slipcycle.io import Case, RunOutputs, Section
+from slipcycle.io.sizes import MEMORY_LIMIT, check_memory, memory_limit
 from slipcycle.rods.model import INTERFACES, Excitation, Rod, TwoRods
 
 __all__ = ["RodsCase", "parse_case", "run_case", "analyse", "interface_bed", "RUN_UNITS",
            "RUN_FLAGS", "MEMORY_LIMIT"]
 
-#: largest estimated memory of one analysis [bytes]
-MEMORY_LIMIT = 4.0e9
 
 
 @dataclass
@@ -62,13 +61,6 @@ def _run_bytes(modes: int, steps: int, rings: int) -> float:
     cached LUs), plus per-step histories and per-element states."""
     m4 = 4.0 * modes
     return 8.0 * (6.0 * m4 * m4 + 40.0 * steps + 8.0 * rings)
-
-
-def _format_bytes(nbytes: float) -> str:
-    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if nbytes >= size:
-            return f"{nbytes / size:.3g} {unit}"
-    return f"{nbytes:.0f} B"
 
 
 def parse_case(case: Case, *, finish: bool = True, limits: bool = False) -> RodsCase:
@@ -127,11 +119,10 @@ def parse_case(case: Case, *, finish: bool = True, limits: bool = False) -> Rods
     if "limits" in case.data and not limits:  # read by `slipcycle limits` only
         case.section("limits").ignore()
     need = _run_bytes(modes, K, rings)
-    if need > MEMORY_LIMIT:
+    if need > memory_limit():
         key = sec.key("modes") if 6.0 * (4.0 * modes) ** 2 * 8 > 0.5 * need else \
             run.key("steps_per_cycle")
-        raise CaseError(key, f"{modes} modes per rod and {K} steps per cycle need about "
-                        f"{_format_bytes(need)} of memory (limit {_format_bytes(MEMORY_LIMIT)})")
+        check_memory(key, need, f"{modes} modes per rod and {K} steps per cycle")
     if finish:
         case.finish()
     try:

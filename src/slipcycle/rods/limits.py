@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from slipcycle.io.sizes import check_memory
 from slipcycle.rods.interfaces import Bed
 from slipcycle.rods.modal import ModalBasis, Propagator, modal_basis, steady_state
 from slipcycle.rods.model import Excitation, TwoRods
@@ -45,8 +46,6 @@ POLE_RTOL = 1e-6
 
 #: bytes per map point kept until the figures are written (arrays, Dataset, figure mesh)
 _MAP_POINT_BYTES = 400.0
-#: largest estimated memory of one analysis [bytes]
-MEMORY_LIMIT = 4.0e9
 
 
 @dataclass(frozen=True)
@@ -342,13 +341,6 @@ def _axis(sec, key, default, **bounds):
     return vals if isinstance(sec.data.get(key, default), dict) else np.sort(vals)
 
 
-def _format_bytes(nbytes: float) -> str:
-    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if nbytes >= size:
-            return f"{nbytes / size:.3g} {unit}"
-    return f"{nbytes:.0f} B"
-
-
 def parse_limits(case, tolerance: float, maps: bool = True) -> LimitsCase:
     """Validate a limits case completely: ``[limits]`` with the same :class:`Section` rules
     as every table (unknown keys with a suggestion, types, bounds, sizes refused with their
@@ -376,11 +368,7 @@ def parse_limits(case, tolerance: float, maps: bool = True) -> LimitsCase:
     if maps:
         for key, size in (("amplitude_ratio", ratios.size * amps.size),
                           ("position", pos.size * npf)):
-            need = size * _MAP_POINT_BYTES
-            if need > MEMORY_LIMIT:
-                raise sec.error(key, f"a map of {size:.3g} points needs about "
-                                f"{_format_bytes(need)} of memory (limit "
-                                f"{_format_bytes(MEMORY_LIMIT)})")
+            check_memory(sec.key(key), size * _MAP_POINT_BYTES, f"a map of {size:.3g} points")
     rc = parse_case(case, limits=True)
     return LimitsCase(rc, tolerance, ratios, amps, pos, npf)
 

@@ -59,6 +59,9 @@ from pathlib import Path
 
 import numpy as np
 
+from slipcycle.errors import InputError
+from slipcycle.io.sizes import format_bytes
+
 __all__ = ["Axis", "SweepStore", "run_sweep", "SweepError", "fingerprint", "TaskRunner",
            "run_group", "worker_threads", "CellOutputs", "lock_store", "check_size",
            "connect_scheduler", "MAX_CELLS", "SCHEDULER_TIMEOUT_S"]
@@ -81,13 +84,8 @@ LOCK_NAME = ".slipcycle.lock"
 _ZARR_PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
 
 
-class SweepError(ValueError):
+class SweepError(InputError):
     """An invalid sweep request (``key`` names the offending option or key)."""
-
-    def __init__(self, key: str, problem: str):
-        self.key = key
-        self.problem = problem
-        super().__init__(f"{key}: {problem}")
 
 
 @dataclass(frozen=True)
@@ -677,18 +675,10 @@ def check_size(sizes, key: str = "--set") -> int:
     cells = math.prod(int(s) for s in sizes)
     if cells > MAX_CELLS:
         raise SweepError(key, f"{cells} cells would need an estimated "
-                         f"{_human_bytes(cells * (_BYTES_PER_CELL + 8 * len(sizes)))} of "
+                         f"{format_bytes(cells * (_BYTES_PER_CELL + 8 * len(sizes)))} of "
                          f"memory (and {cells} files per output); a sweep may have at most "
                          f"{MAX_CELLS} cells: use fewer values")
     return cells
-
-
-def _human_bytes(n: float) -> str:
-    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
-        if n < 1000 or unit == "PB":
-            return f"{n:.3g} {unit}"
-        n /= 1000
-    return f"{n:.3g} PB"  # pragma: no cover
 
 
 class _Lock:
