@@ -183,3 +183,18 @@ def test_malformed_memory_budget_is_one_line_naming_the_variable(tmp_path, monke
                  str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("error: SLIPCYCLE_MEMORY_LIMIT: ")
+
+
+def test_write_together_removes_temporaries_of_a_killed_writer_and_keeps_a_live_ones(tmp_path):
+    from slipcycle.io.results import write_together
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    stale = tmp_path / f".r.npz.partial-{int(dead.stdout)}-x1"
+    stale_old = tmp_path / f".r.npz.old-{int(dead.stdout)}-x2"
+    live = tmp_path / f".r.npz.partial-{os.getpid()}-x3"
+    for p in (stale, stale_old, live):
+        p.write_text("half")
+    write_together([(tmp_path / "r.npz", lambda p: p.write_text("done"))])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["r.npz", live.name])
+    assert (tmp_path / "r.npz").read_text() == "done"

@@ -175,21 +175,21 @@ def test_reduce_case_into_unwritable_place_leaves_no_npz_and_names_the_path(tmp_
 
 
 def test_reduce_failing_second_rename_restores_the_previous_outputs(tmp_path, monkeypatch):
-    from slipcycle.cli import cmd_reduce
+    from slipcycle.io import results
 
     a, b = tmp_path / "a.npz", tmp_path / "sub" / "b.toml"
     a.write_text("old a")
-    real = cmd_reduce.os.replace
+    real = results.os.replace
 
     def replace(src, dst):
         if Path(dst) == b:
             raise PermissionError(13, "Permission denied")
         return real(src, dst)
 
-    monkeypatch.setattr(cmd_reduce.os, "replace", replace)
+    monkeypatch.setattr(results.os, "replace", replace)
     with pytest.raises(CaseError) as exc:
-        cmd_reduce.write_together([(a, lambda p: p.write_text("new a")),
-                                   (b, lambda p: p.write_text("new b"))])
+        results.write_together([(a, lambda p: p.write_text("new a")),
+                                (b, lambda p: p.write_text("new b"))])
     assert exc.value.key == str(b) and "Permission denied" in exc.value.problem
     assert a.read_text() == "old a"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.npz"]

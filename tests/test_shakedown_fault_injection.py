@@ -21,9 +21,10 @@ CASE = EXAMPLES / "shakedown_triangle.toml"
 ARGS = ["--lam-points", "5", "--starts", "2", "--lam-tol", "0.05", "--workers", "1",
         "--no-progress"]
 MAIN = "import sys; from slipcycle.cli.main import main; sys.exit(main())"
-#: seconds after the start at which each interrupted attempt is killed (seeded, spread
-#: over imports, the λ scan, the bisection and the writing of the results)
-KILL_AFTER = [float(t) for t in np.random.default_rng(7).uniform(1.0, 9.0, 4)]
+#: when each interrupted attempt is killed, as fractions of an uninterrupted run's duration
+#: (seeded, spread over imports, the λ scan and the bisection); any two add up to less than
+#: one, so the first two attempts are killed however fast or loaded the machine is
+KILL_FRACTIONS = [float(t) for t in np.random.default_rng(7).uniform(0.1, 0.45, 4)]
 #: entries that legitimately differ between runs (times, paths, provenance, work done)
 VOLATILE = {"wall_time_s", "lp_wall_time_s", "metadata", "runs_computed", "checkpoint",
             "store"}
@@ -65,10 +66,12 @@ def _strays(root: Path) -> list[str]:
 @pytest.mark.slow
 def test_shakedown_killed_at_random_moments_then_resumed_is_bit_identical(tmp_path):
     ref = tmp_path / "ref"
+    t_ref = time.monotonic()
     subprocess.run(_cmd(ref, False), check=True, capture_output=True, timeout=300)
+    t_ref = time.monotonic() - t_ref
     out = tmp_path / "run"
     kills = 0
-    for delay in KILL_AFTER:
+    for delay in (f * t_ref for f in KILL_FRACTIONS):
         # --resume continues a scan store; before there is one, start plainly
         proc = subprocess.Popen(_cmd(out, (out / "scan.zarr").exists()), stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL, start_new_session=True)
@@ -81,7 +84,7 @@ def test_shakedown_killed_at_random_moments_then_resumed_is_bit_identical(tmp_pa
         proc.wait(timeout=60)
         time.sleep(0.2)
         assert _session_alive(proc.pid) == [], "processes survived the killed command"
-    assert kills >= 2, "the kill moments missed the run; move KILL_AFTER"
+    assert kills >= 2, "the kill moments missed the run"
     # and once while the results are being written (the staging directory exists)
     proc = subprocess.Popen(_cmd(out, (out / "scan.zarr").exists()),
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,

@@ -1,7 +1,7 @@
 """``slipcycle reduce MODEL.toml --out reduced.npz``: static reduction to the contact nodes.
 
 MODEL may also be a reduced stiffness from another code (``.mtx`` or ``.npz``): it is
-then imported, checked (SPEC §3: shapes, symmetric, positive definite) and written in
+then imported, checked (shapes, symmetric, positive definite) and written in
 slipcycle's ``.npz`` layout. ``--case discrete.toml`` writes a discrete case file that
 refers to the output, built from the model's ``[fe.discrete]`` table.
 """
@@ -11,9 +11,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import tempfile
-from collections.abc import Callable
 from pathlib import Path
+
+from slipcycle.io.results import write_together
 
 
 def add_parser(sub) -> None:
@@ -28,74 +28,6 @@ def add_parser(sub) -> None:
                    help="also write a discrete case file using [fe.discrete]")
     p.add_argument("--quiet", action="store_true", help="print nothing on success")
     p.set_defaults(execute=execute)
-
-
-def _fs_error(path: Path, exc: OSError):
-    from slipcycle.io import CaseError
-
-    return CaseError(str(path), f"cannot write: {exc.strerror or exc}")
-
-
-def write_together(outputs: list[tuple[Path, Callable[[Path], None]]]) -> None:
-    """Write several files so that either all of them appear or none does.
-
-    Each ``(path, write)`` is first written by ``write(tmp)`` to a temporary file beside
-    ``path``; only when every one is complete are they renamed into place. If a rename
-    fails, the targets already replaced get their previous content back. Directories
-    created for the outputs are removed again on failure. Any file-system problem is one
-    :class:`~slipcycle.io.CaseError` naming the path.
-    """
-    created: list[Path] = []
-    staged: list[tuple[Path, Path]] = []
-    backups: list[tuple[Path, Path | None]] = []
-    try:
-        for path, write in outputs:
-            missing = [d for d in [path.parent, *path.parent.parents] if not d.exists()]
-            try:
-                for d in reversed(missing):
-                    d.mkdir()
-                    created.append(d)
-                fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial",
-                                           dir=path.parent)
-                os.close(fd)
-                staged.append((Path(tmp), path))
-                write(Path(tmp))
-                os.chmod(tmp, 0o644)
-            except OSError as exc:
-                raise _fs_error(path, exc) from None
-        for tmp, path in staged:
-            try:
-                old = None
-                if path.exists():
-                    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".old",
-                                                dir=path.parent)
-                    os.close(fd)
-                    old = Path(name)
-                    os.replace(path, old)
-                backups.append((path, old))
-                os.replace(tmp, path)
-            except OSError as exc:
-                raise _fs_error(path, exc) from None
-    except BaseException:
-        for path, old in reversed(backups):        # undo the renames already made
-            try:
-                if old is not None:
-                    os.replace(old, path)
-                elif path.exists():
-                    path.unlink()
-            except OSError:
-                pass
-        for tmp, _ in staged:
-            tmp.unlink(missing_ok=True)
-        for d in reversed(created):
-            try:
-                d.rmdir()
-            except OSError:
-                pass
-        raise
-    for _, old in backups:
-        if old is not None:
-            old.unlink(missing_ok=True)
 
 
 def execute(args: argparse.Namespace) -> int:

@@ -24,7 +24,7 @@ import xarray as xr
 from slipcycle import __version__
 
 __all__ = ["RunOutputs", "write_outputs", "provenance", "to_jsonable", "check_output_dir",
-           "check_output_file", "remove_stale_partials"]
+           "check_output_file", "remove_stale_partials", "write_together"]
 
 RESULT_FILES = ("summary.json", "result.nc", "figures")
 
@@ -143,11 +143,76 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
     return out_dir
 
 
+
+
+def write_together(outputs: list[tuple[Path, Callable[[Path], None]]]) -> None:
+    """Write several files so that either all of them appear or none does.
+
+    Each ``(path, write)`` is first written by ``write(tmp)`` to a temporary file beside
+    ``path``; only when every one is complete are they renamed into place. If a rename
+    fails, the targets already replaced get their previous content back. Directories
+    created for the outputs are removed again on failure. Any file-system problem is one
+    :class:`~slipcycle.io.CaseError` naming the path.
+    """
+    created: list[Path] = []
+    staged: list[tuple[Path, Path]] = []
+    backups: list[tuple[Path, Path | None]] = []
+    try:
+        for path, write in outputs:
+            missing = [d for d in [path.parent, *path.parent.parents] if not d.exists()]
+            try:
+                for d in reversed(missing):
+                    d.mkdir()
+                    created.append(d)
+                remove_stale_partials(path)
+                fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.partial-{os.getpid()}-",
+                                           dir=path.parent)
+                os.close(fd)
+                staged.append((Path(tmp), path))
+                write(Path(tmp))
+                os.chmod(tmp, 0o644)
+            except OSError as exc:
+                raise _output_error(path, exc) from None
+        for tmp, path in staged:
+            try:
+                old = None
+                if path.exists():
+                    fd, name = tempfile.mkstemp(prefix=f".{path.name}.old-{os.getpid()}-",
+                                                dir=path.parent)
+                    os.close(fd)
+                    old = Path(name)
+                    os.replace(path, old)
+                backups.append((path, old))
+                os.replace(tmp, path)
+            except OSError as exc:
+                raise _output_error(path, exc) from None
+    except BaseException:
+        for path, old in reversed(backups):        # undo the renames already made
+            try:
+                if old is not None:
+                    os.replace(old, path)
+                elif path.exists():
+                    path.unlink()
+            except OSError:
+                pass
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+        for d in reversed(created):
+            try:
+                d.rmdir()
+            except OSError:
+                pass
+        raise
+    for _, old in backups:
+        if old is not None:
+            old.unlink(missing_ok=True)
+
+
 def _output_error(path: Path, exc: OSError):
     from slipcycle.io.case import CaseError
 
-    where = exc.filename if exc.filename else path
-    return CaseError(str(where), f"cannot write: {exc.strerror or exc}")
+    # name what the user asked for, not a staging name they never saw
+    return CaseError(str(path), f"cannot write: {exc.strerror or exc}")
 
 
 def _first_existing(path: Path) -> Path:
@@ -211,10 +276,11 @@ def _pid_alive(pid: int) -> bool:
 
 
 def remove_stale_partials(out_dir: str | Path) -> list[Path]:
-    """Remove staging folders left by a killed write of ``out_dir``.
+    """Remove staging folders and files left by a killed write of ``out_dir`` (a result
+    directory or a single output file).
 
-    Staging folders are named ``.<name>.partial-<pid>-*`` (and replaced results
-    ``.<entry>.old-<pid>``); those whose process no longer runs are deleted. Folders of a
+    Staging entries are named ``.<name>.partial-<pid>-*`` (and replaced results
+    ``.<entry>.old-<pid>``); those whose process no longer runs are deleted. Entries of a
     live process (a concurrent write) are left alone.
 
     Returns
@@ -226,6 +292,7 @@ def remove_stale_partials(out_dir: str | Path) -> list[Path]:
     candidates = []
     if out_dir.parent.is_dir():
         candidates += out_dir.parent.glob(f".{out_dir.name}.partial-*")
+        candidates += out_dir.parent.glob(f".{out_dir.name}.old-*")
     if out_dir.is_dir():
         candidates += out_dir.glob(".*.old-*")
     removed = []
@@ -235,7 +302,10 @@ def remove_stale_partials(out_dir: str | Path) -> list[Path]:
         pid_text = tail.split("-", 1)[0]
         if pid_text.isdigit() and _pid_alive(int(pid_text)):
             continue
-        shutil.rmtree(path, ignore_errors=True)
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
         removed.append(path)
     return removed
 
