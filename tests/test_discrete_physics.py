@@ -1,4 +1,4 @@
-"""Physics of the discrete model against closed forms and theorems (SPEC §2)."""
+"""Physics of the discrete model against closed forms and theorems."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from slipcycle.discrete import DiscreteLoad, FrictionalSystem, critical_friction, simulate
+from slipcycle.discrete.shakedown import extreme_constraints
 from slipcycle.discrete.wellposed import is_p_matrix
-from slipcycle.plot.discrete import extreme_constraints
 
 # -- Jenkins element (one uncoupled node) ------------------------------------------------
 

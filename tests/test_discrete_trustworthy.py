@@ -232,7 +232,7 @@ def test_run_summary_gives_a_unit_for_every_numeric_entry_and_flags_for_steady_s
 
 def test_basins_summary_units_flags_and_converged_mask(run_cli, tmp_path, monkeypatch):
     import slipcycle.io as sio
-    from slipcycle.sweep.case import STEADY_CODES
+    from slipcycle.discrete.steady import STEADY_CODES
 
 
     seen = {}

@@ -1,4 +1,4 @@
-"""Safe region and λ1, λ2 against independent computations (issue 4, SPEC §2)."""
+"""Safe region and λ1, λ2 against independent computations (issue 4)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import pytest
 from slipcycle.discrete import DiscreteLoad, FrictionalSystem
 from slipcycle.discrete.case import read_discrete_case
 from slipcycle.discrete.shakedown import (
+    extreme_constraints,
     lambda1,
     lambda2,
     polygon_vertices,
@@ -19,7 +20,6 @@ from slipcycle.discrete.shakedown import (
 )
 from slipcycle.io import read_case
 from slipcycle.loading import TabulatedLoad
-from slipcycle.plot.discrete import extreme_constraints
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

@@ -9,15 +9,12 @@ Subpackages, one per capability:
 - :mod:`slipcycle.rods`      two rods with a frictional interface
 - :mod:`slipcycle.io`        case files and result files
 - :mod:`slipcycle.sweep`     parallel evaluation over parameter grids
+- :mod:`slipcycle.kernels`   compiled kernels shared by several models (the Jenkins bed)
+- :mod:`slipcycle.registry`  model name -> reader, solver, serving commands
 - :mod:`slipcycle.plot`      figures
 - :mod:`slipcycle.cli`       the ``slipcycle`` command
 """
 
-from importlib.metadata import PackageNotFoundError, version
-
-try:
-    __version__ = version("slipcycle")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0.0.0+unknown"
+from slipcycle._version import __version__
 
 __all__ = ["__version__"]

@@ -10,10 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 from pathlib import Path
-
-from slipcycle.io.results import write_together
 
 
 def add_parser(sub) -> None:
@@ -31,8 +28,8 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
+    from slipcycle.fe.files import import_stiffness, reduce_model
     from slipcycle.io import CaseError
-    from slipcycle.io.results import provenance
 
     if args.out.suffix.lower() != ".npz":
         raise CaseError("--out", f"must name an .npz file, got {args.out}")
@@ -41,79 +38,10 @@ def execute(args: argparse.Namespace) -> int:
         if args.case is not None:
             raise CaseError("--case", "needs a model file with [fe.discrete], "
                                       "not imported matrices")
-        info = _import(args, provenance)
+        info = import_stiffness(args.model, args.out, args.dof_order)
     else:
-        info = _reduce(args, provenance)
+        info = reduce_model(args.model, args.out, args.case)
     if not args.quiet:
         print(json.dumps(info, indent=2))
         print(f"reduced model written to {args.out}")
     return 0
-
-
-def _savez(path: Path, arrays: dict) -> None:
-    import numpy as np
-
-    with open(path, "wb") as fh:
-        np.savez_compressed(fh, **arrays)
-
-
-def _import(args, provenance) -> dict:
-    import numpy as np
-
-    from slipcycle.io import CaseError
-    from slipcycle.io.matrices import StiffnessError, read_stiffness
-
-    if not args.model.exists():
-        raise CaseError("model", f"file not found: {args.model}")
-    try:
-        data = read_stiffness(args.model, args.dof_order)
-    except StiffnessError as exc:
-        raise CaseError(f"{args.model.name}:{exc.key}", exc.problem) from None
-    except ValueError as exc:
-        raise CaseError(args.model.name, str(exc)) from None
-    meta = provenance("", args.model.resolve())
-    meta["imported_from"] = str(args.model)
-    data = {k: v for k, v in data.items() if k != "metadata"}
-    data["dof_order"] = np.array("tangential_first")
-    data["metadata"] = np.array(json.dumps(meta))
-    write_together([(args.out, lambda tmp: _savez(tmp, data))])
-    n = data["A"].shape[0]
-    return {"n_contact_nodes": n, "imported_from": str(args.model),
-            "coupling_B_over_A": float(np.linalg.norm(data["B"]) / np.linalg.norm(data["A"]))}
-
-
-def _reduce(args, provenance) -> dict:
-    import numpy as np
-
-    from slipcycle.fe.model import build_problem, discrete_case_text, read_discrete_table
-    from slipcycle.fe.reduction import reduce_problem
-    from slipcycle.io import CaseError, read_case
-    from slipcycle.io.matrices import StiffnessError, check_stiffness
-
-    case = read_case(args.model, models=["fe"])
-    problem = build_problem(case)  # validates everything, raises CaseError
-    discrete = read_discrete_table(case.section("fe"))
-    if args.case is not None and discrete is None:
-        raise CaseError("fe.discrete", "required table is missing (needed for --case)")
-    try:
-        reduced = reduce_problem(problem)
-    except ValueError as exc:
-        raise CaseError("fe", str(exc)) from None
-    try:
-        check_stiffness({"A": reduced.A, "B": reduced.B, "C": reduced.C})
-    except StiffnessError as exc:
-        raise CaseError("fe", f"reduced stiffness {exc.problem}") from None
-    text = None
-    if args.case is not None:
-        rel = os.path.relpath(args.out.resolve(), args.case.resolve().parent)
-        text = discrete_case_text(discrete, reduced, rel)
-    meta = provenance(case.text, case.path)
-    outputs = [(args.out, lambda tmp: reduced.save(tmp, meta, atomic=False))]
-    if text is not None:
-        outputs.append((args.case, lambda tmp: tmp.write_text(text, encoding="utf-8")))
-    write_together(outputs)
-    info = {k: v for k, v in reduced.info.items() if k in (
-        "geometry", "n_dofs", "n_contact_nodes", "element", "condense_seconds")}
-    info["load_cases"] = reduced.load_cases
-    info["coupling_B_over_A"] = float(np.linalg.norm(reduced.B) / np.linalg.norm(reduced.A))
-    return info

@@ -17,11 +17,11 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from slipcycle.cli.models import MODEL_RUNNERS, run_model
     from slipcycle.io import read_case, write_outputs
     from slipcycle.io.results import to_jsonable
+    from slipcycle.registry import RUN_MODELS, run_model
 
-    case = read_case(args.case, models=list(MODEL_RUNNERS))
+    case = read_case(args.case, models=list(RUN_MODELS))
     outputs = run_model(case)
     write_outputs(args.out, outputs, case.text, case.path)
     if not args.quiet:

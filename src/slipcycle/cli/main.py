@@ -13,7 +13,7 @@ import argparse
 import importlib
 import sys
 
-from slipcycle import __version__
+from slipcycle._version import __version__
 
 COMMANDS = ["run", "demo", "map", "reduce", "limits", "shakedown", "basins", "sweep"]
 

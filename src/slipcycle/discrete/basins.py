@@ -1,4 +1,5 @@
-"""Basins of attraction: steady state versus initial condition (SPEC §2, seed 001 §3.1).
+"""Basins of attraction: steady state versus initial condition (Ahn, Bertocchi & Barber
+2008; Andersson, Barber & Ahn 2013).
 
 For a coupled system the steady state depends on the initial condition (Ahn, Bertocchi &
 Barber 2008; Andersson, Barber & Ahn 2013). This module maps it:
@@ -11,29 +12,49 @@ Barber 2008; Andersson, Barber & Ahn 2013). This module maps it:
   slip states at θ = 0, one grid row per sweep cell (:mod:`slipcycle.sweep`);
 - :func:`initial_conditions_task` — any N: a list of protocols or random admissible states;
 - :func:`box_counting_dimension` — dimension of the boundaries between classes (fractal
-  basin boundaries near unstable orbits, seed 001 §3.1).
+  basin boundaries near unstable orbits);
+- :func:`basins_study` — the whole study of ``slipcycle basins``: a grid, random starts or
+  assembly protocols (:func:`read_protocols`) through the sweep engine, the summary,
+  Dataset and basin map.
 
-Class codes are :data:`slipcycle.sweep.case.STEADY_CODES`:
+Class codes are :data:`slipcycle.discrete.steady.STEADY_CODES`:
 0 shakedown, 1 cyclic_slip, 2 ratcheting, 3 not_converged, 4 inadmissible, 5 failed.
 """
 
 from __future__ import annotations
 
 import functools
+import time
+import tomllib
+from functools import partial
+from pathlib import Path
 
 import numpy as np
+import xarray as xr
 from scipy.optimize import linprog
 
 from slipcycle.discrete.fastcycle import steady_states_batch
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
-from slipcycle.discrete.shakedown import admissible_region_at, sample_initial_slips
-from slipcycle.discrete.steady import InadmissibleInitialState, simulate
-from slipcycle.sweep.case import STEADY_CODES
+from slipcycle.discrete.shakedown import (
+    admissible_region_at,
+    lambda1,
+    lambda2,
+    safe_region,
+    sample_initial_slips,
+)
+from slipcycle.discrete.sizes import cells_bytes, check_memory
+from slipcycle.discrete.steady import STEADY_CODES, InadmissibleInitialState, simulate
+from slipcycle.io import Case, CaseError, RunOutputs
+from slipcycle.io.case import Section
+from slipcycle.plot.shakedown import basin_map
+from slipcycle.sweep import Axis, SweepError, run_sweep
+from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
 __all__ = ["run_record", "run_records", "basin_row", "admissible_box",
            "box_counting_dimension", "class_code", "load_discrete_case",
-           "basin_row_task", "lam_start_task"]
+           "basin_row_task", "lam_start_task", "protocol_task", "random_task",
+           "read_protocols", "parse_range", "basins_study", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
 
 INADMISSIBLE = STEADY_CODES.index("inadmissible")
 
@@ -278,3 +299,267 @@ def box_counting_dimension(labels: np.ndarray, min_boxes: int = 4,
     slope = np.polyfit(np.log(1.0 / sizes[ok]), np.log(counts[ok]), 1)[0]
     return {"dimension": float(slope), "sizes": sizes.tolist(), "counts": counts.tolist(),
             "boundary_cells": nb}
+
+
+# --- the basins study -----------------------------------------------------------------
+#: unit of every numeric summary entry (nested entries by their path)
+SUMMARY_UNITS = {
+    "lam": "1", "n_nodes": "1", "lambda1": "1", "lambda2": "1", "starts": "1",
+    "class_counts": "1", "dissipation_per_cycle.min": "J",
+    "dissipation_per_cycle.max": "J", "both_outcomes": "1", "wall_time_s": "s",
+    "boundary_box_counting_dimension": "1", "box_counting.dimension": "1",
+    "box_counting.sizes": "1", "box_counting.counts": "1",
+    "box_counting.boundary_cells": "1", "grid": "1",
+}
+
+#: every word of the categorical summary entries
+SUMMARY_FLAGS = {"mode": ("grid", "random", "protocols")}
+
+CONVERGED_ATTRS = {"units": "1", "long_name": "the start reached a steady state (shakedown, "
+                   "cyclic slip or ratcheting) within run.cycles; false for not_converged, "
+                   "inadmissible and failed starts"}
+
+
+def parse_range(text: str, key: str) -> tuple[float, float]:
+    """``"a:b"`` -> (a, b), finite with a < b; :class:`CaseError` naming ``key`` otherwise."""
+    try:
+        a, b = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise CaseError(key, f"must be a:b, got {text!r}") from None
+    if not (np.isfinite(a) and np.isfinite(b) and b > a):
+        raise CaseError(key, f"needs finite a < b, got {text!r}")
+    return a, b
+
+
+def read_protocols(path: Path, n: int) -> list[np.ndarray]:
+    """Assembly protocols of an N-node system from a TOML file.
+
+    Parameters
+    ----------
+    path : Path
+        TOML file of ``[[protocol]]`` tables, each with ``p_w`` and optional ``q_w``: lists
+        of load states, (S, N) nested lists [N], visited before cycling.
+    n : int
+        Number of nodes N.
+
+    Returns
+    -------
+    list of (S, 2N) arrays
+        Each protocol as rows [q_w, p_w] [N].
+
+    Raises
+    ------
+    CaseError
+        Naming ``--protocols`` (unreadable file, not TOML) or the offending key.
+    """
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise CaseError("--protocols", f"cannot read {path}: {exc.strerror}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError("--protocols", f"not valid TOML: {exc}") from None
+    root = Section(data, "", path.parent)
+    out = []
+    for ps in root.tables("protocol"):
+        p = ps.array("p_w", shape=(None, n))
+        q = ps.array("q_w", np.zeros_like(p), shape=(p.shape[0], n))
+        ps.finish()
+        out.append(np.hstack([q, p]))
+    root.finish()
+    if not out:
+        raise CaseError("protocol", "the protocols file holds no [[protocol]] tables")
+    return out
+
+
+def protocol_task(params, case_text, case_path, protocols, lam):
+    """Sweep task: steady state after assembly protocol ``params["index"]``."""
+    dc = load_discrete_case(case_text, case_path)
+    load = dc.load if lam is None else dc.load.with_lam(lam)
+    return run_record(dc.system, load, protocol=np.asarray(protocols[int(params["index"])]),
+                      **_run_settings(dc))
+
+
+def random_task(params, case_text, case_path, V):
+    """Sweep task: steady state from initial slip ``V[params["index"]]`` (N,) [m]."""
+    dc = load_discrete_case(case_text, case_path)
+    lam = params.get("lam")
+    load = dc.load if lam is None else dc.load.with_lam(lam)
+    i = int(params["index"])
+    out = run_records(dc.system, load, np.asarray(V)[i:i + 1], **_run_settings(dc))
+    return {k: v[0] for k, v in out.items()}
+
+
+def basins_study(case: Case, out, *, grid: int | None = None, random: int | None = None,
+                 protocols: Path | None = None, v1_range: str | None = None,
+                 v2_range: str | None = None, lam: float | None = None, seed: int = 0,
+                 workers: int | None = None, scheduler=None, resume: bool = False,
+                 progress: bool = True, stop_after: int | None = None) -> StudyStatus:
+    """Steady state (class, dissipation per cycle) of a discrete case over initial conditions.
+
+    At most one of ``grid``, ``random``, ``protocols`` (default: a 101 × 101 grid for
+    N = 2, 64 random starts otherwise).
+
+    Parameters
+    ----------
+    case : Case
+        A ``model = "discrete"`` case.
+    out : path
+        Directory of the store ``basins.zarr``.
+    grid : int, optional
+        N = 2: grid points per axis of initial slips (v1, v2) at θ = 0 over the box of
+        admissible states (or ``v1_range``/``v2_range``, ``"a:b"`` [m]); the box-counting
+        dimension of the class boundaries is reported.
+    random : int, optional
+        Random admissible initial slip states (``seed``), any N.
+    protocols : Path, optional
+        TOML file of assembly protocols (:func:`read_protocols`), any N.
+    lam : float, optional
+        Load factor λ (default the case's ``loading.lam``).
+    workers, scheduler, resume, progress, stop_after
+        See :func:`~slipcycle.sweep.core.run_sweep` (grid rows run in parallel threads).
+
+    Returns
+    -------
+    StudyStatus
+        ``outputs`` once every cell is done: ``summary`` (``mode``, ``lam``, ``lambda1``,
+        ``lambda2``, ``starts``, ``class_counts``, ``dissipation_per_cycle`` {min, max} [J],
+        ``both_outcomes``, ``steady_state_codes``, for a grid ``box_counting``; ``units``:
+        :data:`SUMMARY_UNITS`), ``dataset`` (class codes, dissipation, cycles run, slipping
+        nodes, memory erased, ``converged``) and, for a grid, the figure ``basin_map``.
+
+    Raises
+    ------
+    CaseError
+        A bad option (named by its command-line spelling, e.g. ``--grid``), a map too
+        large for memory, or a refused store, before any simulation.
+    """
+    out = Path(out)
+    lam_opt, workers_opt = lam, workers
+    cpath = str(case.path) if case.path else None
+    dc = load_discrete_case(case.text, cpath)
+    n = dc.system.n_nodes
+    if lam_opt is not None and not (np.isfinite(lam_opt) and lam_opt >= 0):
+        raise CaseError("--lam", f"must be a finite number >= 0, got {lam_opt}")
+    lam = lam_opt if lam_opt is not None else float(dc.load.p.lam)
+    load = dc.load.with_lam(lam)
+    mode = "grid" if grid is not None else ("random" if random is not None else
+                                            "protocols" if protocols else None)
+    if mode is None:
+        mode = "grid" if n == 2 else "random"
+        grid = 101 if n == 2 else None
+        random = None if n == 2 else 64
+    if mode == "grid":
+        if n != 2:
+            raise CaseError("--grid", f"needs a two-node system (this one has {n} nodes); "
+                            "use --random or --protocols")
+        if grid < 2:
+            raise CaseError("--grid", f"must be >= 2, got {grid}")
+        # a grid row is one task returning arrays: per start, the class, D, D_j, counts
+        # (8 numbers) held ~4 times (rows, store, Dataset, figure)
+        check_memory("--grid", float(grid) ** 2 * 8 * (n + 8) * 4,
+                     f"{grid:g} × {grid:g} starts")
+        box = admissible_box(dc.system, load)
+        if v1_range:
+            box[0] = parse_range(v1_range, "--v1")
+        if v2_range:
+            box[1] = parse_range(v2_range, "--v2")
+        if not np.all(np.isfinite(box)):
+            raise CaseError("loading.lam", f"no slip state is admissible at θ = 0 for λ = "
+                            f"{lam:g}; give --v1 and --v2 ranges")
+        v1 = np.linspace(box[0, 0], box[0, 1], grid)
+        v2 = np.linspace(box[1, 0], box[1, 1], grid)
+        threads = None if (workers_opt in (None, 1) and scheduler is None) else 1
+        workers = 1 if workers_opt is None and scheduler is None else workers_opt
+        fn = partial(basin_row_task, case_text=case.text, case_path=cpath,
+                     v1=tuple(v1.tolist()), v2=tuple(v2.tolist()), lam=lam, threads=threads)
+        axes = [Axis("row", tuple(range(grid)))]
+        desc = {"mode": "grid", "lam": lam, "v1": v1.tolist(), "v2": v2.tolist()}
+    elif mode == "random":
+        if random < 1:
+            raise CaseError("--random", f"must be >= 1, got {random}")
+        check_memory("--random", cells_bytes(random, n) + 8.0 * random * n * 8,
+                     f"{random:g} random starts ({n} nodes)")
+        V = sample_initial_slips(dc.system, load, random, seed=seed)
+        if V.shape[0] == 0:
+            raise CaseError("loading.lam", f"no slip state is admissible at θ = 0 for λ = "
+                            f"{lam:g}")
+        fn = partial(random_task, case_text=case.text, case_path=cpath,
+                     V=tuple(map(tuple, V.tolist())))
+        axes = [Axis("index", tuple(range(V.shape[0])))]
+        desc = {"mode": "random", "lam": lam, "V": V.tolist()}
+        workers = workers_opt
+    else:
+        protos = read_protocols(protocols, n)
+        fn = partial(protocol_task, case_text=case.text, case_path=cpath,
+                     protocols=tuple(p.tolist() for p in protos), lam=lam)
+        axes = [Axis("index", tuple(range(len(protos))))]
+        desc = {"mode": "protocols", "lam": lam, "protocols": [p.tolist() for p in protos]}
+        workers = workers_opt
+    t0 = time.perf_counter()
+    try:
+        store = run_sweep(fn, axes, out / "basins.zarr",
+                          description={"case": case.text, **desc}, resume=resume,
+                          workers=workers, scheduler=scheduler,
+                          progress=progress, stop_after=stop_after,
+                          desc="basins")
+    except SweepError as exc:
+        raise as_case_error(exc) from None
+    wall = time.perf_counter() - t0
+    done = store.done()
+    if not done.all():
+        return StudyStatus(None, int(done.sum()), int(done.size))
+    data = store.read()
+    region = safe_region(dc.system, dc.load)
+    l2 = lambda2(region)[0]
+    l1 = lambda1(region, l2)["lambda1"]
+    cls = data["steady_state"]
+    counts = {STEADY_CODES[c]: int((cls == c).sum()) for c in np.unique(cls)}
+    adm = cls != STEADY_CODES.index("inadmissible")
+    # reached a steady state (shakedown, cyclic slip or ratcheting) within run.cycles
+    converged = np.isin(cls, [STEADY_CODES.index(c) for c in
+                              ("shakedown", "cyclic_slip", "ratcheting")])
+    D = data["dissipation_per_cycle"]
+    summary = {"model": "discrete", "analysis": "basins", "mode": mode, "lam": lam,
+               "n_nodes": n, "lambda1": l1, "lambda2": l2, "starts": int(cls.size),
+               "class_counts": counts,
+               "dissipation_per_cycle": {"min": float(np.nanmin(D[adm])) if adm.any()
+                                         else None,
+                                         "max": float(np.nanmax(D[adm])) if adm.any()
+                                         else None},
+               "both_outcomes": bool((cls == 0).any() and (cls == 1).any()),
+               "steady_state_codes": list(STEADY_CODES), "wall_time_s": wall,
+               "units": dict(SUMMARY_UNITS)}
+    figures = {}
+    if mode == "grid":
+        # boundaries between admissible starts only: the edge of the admissible region
+        # is smooth and says nothing about the dynamics
+        bc = box_counting_dimension(cls, valid=adm)
+        summary["boundary_box_counting_dimension"] = bc["dimension"]
+        summary["box_counting"] = bc
+        summary["grid"] = [int(grid), int(grid)]
+        ds = xr.Dataset(
+            {"steady_state": (("v2", "v1"), cls, {"units": "1", "flag_values": list(range(
+                len(STEADY_CODES))), "flag_meanings": " ".join(STEADY_CODES)}),
+             "dissipation_per_cycle": (("v2", "v1"), D, {"units": "J"}),
+             "dissipation_per_node": (("v2", "v1", "node"), data["dissipation_per_node"],
+                                      {"units": "J"}),
+             "cycles_run": (("v2", "v1"), data["cycles_run"], {"units": "1"}),
+             "n_slipping": (("v2", "v1"), data["n_slipping"], {"units": "1"}),
+             "memory_erased": (("v2", "v1"), data["memory_erased"], {"units": "1"}),
+             "converged": (("v2", "v1"), converged, CONVERGED_ATTRS)},
+            coords={"v1": ("v1", v1, {"units": "m", "long_name": "initial slip of node 0"}),
+                    "v2": ("v2", v2, {"units": "m", "long_name": "initial slip of node 1"})})
+        figures["basin_map"] = lambda: basin_map(v1, v2, cls, D, region, lam)
+    else:
+        codes = list(range(len(STEADY_CODES)))
+        ds = store_dataset(store, axes, attrs={
+            "steady_state": {"units": "1", "flag_values": codes,
+                             "flag_meanings": " ".join(STEADY_CODES)},
+            "dissipation_per_cycle": {"units": "J"}, "dissipation_per_node": {"units": "J"},
+            "cycles_run": {"units": "1"}, "n_slipping": {"units": "1"},
+            "memory_erased": {"units": "1"}})
+        ds["converged"] = (tuple(ds["steady_state"].dims), converged, CONVERGED_ATTRS)
+    outputs = RunOutputs(summary=summary, dataset=ds, figures=figures, flags=dict(SUMMARY_FLAGS))
+    return StudyStatus(outputs, int(done.size), int(done.size))

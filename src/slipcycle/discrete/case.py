@@ -1,4 +1,4 @@
-"""``model = "discrete"``: case file → model → steady state → results (SPEC §2, §6).
+"""``model = "discrete"``: case file → model → steady state → results.
 
 Everything in the case is read and checked (:func:`read_discrete_case`) before any
 computation; :func:`run_case` then solves and returns the summary, the dataset and the
@@ -14,6 +14,7 @@ import xarray as xr
 
 from slipcycle.discrete.loads import DiscreteLoad, LoadCase
 from slipcycle.discrete.model import STATE_NAMES, FrictionalSystem, ModelError
+from slipcycle.discrete.shakedown import extreme_constraints, safe_vertices
 from slipcycle.discrete.steady import (
     STEADY_CLASSES,
     InadmissibleInitialState,
@@ -387,6 +388,12 @@ def summarize(dc: DiscreteCase, res, wall: float) -> dict:
     }
 
 
+def _v_space_geometry(dc: DiscreteCase):
+    """Constraints at their extreme positions and the safe region's vertices (N = 2)."""
+    G, h = extreme_constraints(dc.system, dc.load)
+    return G, h, safe_vertices(G, h)
+
+
 def run_case(case: Case) -> RunOutputs:
     """Validate the whole case, solve to the steady state, return summary/dataset/figures."""
     dc = read_discrete_case(case)
@@ -396,13 +403,13 @@ def run_case(case: Case) -> RunOutputs:
     wall = time.perf_counter() - t0
     summary = summarize(dc, res, wall)
     ds = _dataset(dc, res)
-    from slipcycle.plot import discrete as plots
+    from slipcycle.plot import discrete as plots  # matplotlib only when figures are made
 
     figures = {
         "slip_and_tractions": lambda: plots.slip_and_tractions(ds),
         "hysteresis": lambda: plots.hysteresis(ds),
     }
     if dc.system.n_nodes == 2:
-        figures["v_space"] = lambda: plots.v_space(dc.system, dc.load, res)
+        figures["v_space"] = lambda: plots.v_space(res, *_v_space_geometry(dc))
     return RunOutputs(summary=summary, dataset=ds, figures=figures,
                       flags=dict(SUMMARY_FLAGS))

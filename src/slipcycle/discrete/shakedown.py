@@ -1,19 +1,20 @@
-"""Safe shakedown region and critical load factors λ1…λ4 (SPEC §2, seed 001 §3).
+"""Safe shakedown region and critical load factors λ1…λ4 (Klarbring, Ciavarella & Barber
+2007; Ahn, Bertocchi & Barber 2008).
 
 With every node in contact (w = 0) the Coulomb inequalities |q_j| ≤ f_j p_j are 2N
 half-spaces in slip space. Constraint k = (j, s), s = ±1, reads
 
     s q_j + f_j p_j ≥ 0   ⇔   −(s A_j + f_j B_j) · v ≤ s q^w_j(θ) + f_j p^w_j(θ)
 
-(s = +1: q_j ≥ −f p_j, the constraint that drives positive slip, seed eq. 3 II/IV;
-s = −1: q_j ≤ +f p_j, seed eq. 3 I/III). The loads are p^w = p0 + λ p̃(θ),
+(s = +1: q_j ≥ −f p_j, the constraint that drives positive slip, Barber's II/IV;
+s = −1: q_j ≤ +f p_j, Barber's I/III). The loads are p^w = p0 + λ p̃(θ),
 q^w = q0 + λ q̃(θ) (plus load cases with time functions mean + λ g̃(θ)), so the right-hand
 side is c0_k + λ c1_k(θ) with zero-mean c1_k. A slip state v is safe for the whole cycle
 iff it satisfies every constraint at its *extreme position*
 
     G v ≤ h(λ) = h0 + λ m,     G_k = −(s A_j + f_j B_j),  h0_k = c0_k,  m_k = min_θ c1_k(θ)
 
-(λ ≥ 0). This polyhedron S(λ) is the safe shakedown region. Definitions (SPEC §2):
+(λ ≥ 0). This polyhedron S(λ) is the safe shakedown region. Definitions:
 
 - λ2 = sup{λ : S(λ) ≠ ∅} — one linear program in (v, λ);
 - λ1 = sup{λ : all 2N constraints are non-redundant in S(μ) for every μ ≤ λ}; a
@@ -54,7 +55,7 @@ from slipcycle.loading import HarmonicLoad
 __all__ = ["SafeRegion", "safe_region", "lambda2", "lambda1", "redundant_constraints",
            "polygon_vertices", "admissible_region_at", "sample_initial_slips",
            "simulation_brackets", "Brackets", "constraint_names", "run_criteria",
-           "refine_brackets", "Refinement"]
+           "refine_brackets", "Refinement", "extreme_constraints", "safe_vertices"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -108,6 +109,15 @@ class SafeRegion:
     def contains(self, v: np.ndarray, lam: float, tol: float = 0.0) -> np.ndarray:
         """Whether slip states v (..., N) [m] lie in S(λ) (with slack ``tol`` [N])."""
         return np.all(np.asarray(v) @ self.G.T <= self.h(lam) + tol, axis=-1)
+
+    @property
+    def names(self) -> list[str]:
+        """Labels of the 2N rows (:func:`constraint_names`)."""
+        return constraint_names(self.n_nodes)
+
+    def vertices(self, lam: float) -> np.ndarray:
+        """N = 2: vertices of S(λ), (k, 2) [m] (:func:`polygon_vertices`)."""
+        return polygon_vertices(self, lam)
 
     @property
     def scale(self) -> float:
@@ -374,6 +384,75 @@ def polygon_vertices(region: SafeRegion, lam: float, rtol: float = 1e-9) -> np.n
         if np.linalg.norm(pts[i] - pts[keep[-1]]) > 1e-9 * span:
             keep.append(i)
     return pts[keep]
+
+
+def extreme_constraints(system: FrictionalSystem, load: DiscreteLoad, steps: int = 720
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """Extreme positions of the 2N all-contact friction constraints in v-space, sampled.
+
+    A brute-force reference for :func:`safe_region` (same rows, opposite sign convention)
+    and the geometry of the single-run v-space figure.
+
+    Constraint (j, s), s = ±1: s q_j + f_j p_j ≥ 0 with w = 0, i.e.
+    (s A_j + f_j B_j) · v ≥ −(s q^w_j(θ) + f_j p^w_j(θ)). Its extreme position is the largest
+    right-hand side over the cycle.
+
+    Returns
+    -------
+    G : (2N, N) array
+        Rows s A_j + f_j B_j [N/m].
+    h : (2N,) array
+        max over θ of the right-hand side [N]; the safe region is {v : G v ≥ h}.
+
+    Notes
+    -----
+    ``steps`` + 1 samples of θ over [0, 2π]; the maxima are those of the samples (exact
+    for loads whose extreme lies on a sample, below the true one by O(steps⁻²) otherwise).
+    """
+    n = system.n_nodes
+    th = np.linspace(0, 2 * np.pi, steps + 1)
+    r = load(th)
+    qw, pw = r[:, :n], r[:, n:]
+    f = system.friction
+    G, h = [], []
+    for j in range(n):
+        for s in (1.0, -1.0):
+            G.append(s * system.A[j] + f[j] * system.B[j])
+            h.append(np.max(-(s * qw[:, j] + f[j] * pw[:, j])))
+    return np.array(G), np.array(h)
+
+
+
+def safe_vertices(G: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Vertices of the N = 2 safe region {v : G v ≥ h}.
+
+    Parameters
+    ----------
+    G : (m, 2) array [N/m], h : (m,) array [N]
+        Constraints, e.g. from :func:`extreme_constraints`.
+
+    Returns
+    -------
+    (k, 2) array
+        Vertices [m] in counter-clockwise order (empty when the region is empty or
+        unbounded in the pairwise intersections).
+    """
+    verts = []
+    m = G.shape[0]
+    tol = 1e-9 * max(float(np.abs(h).max()), np.finfo(float).tiny)
+    for a in range(m):
+        for b in range(a + 1, m):
+            M = G[[a, b]]
+            if abs(np.linalg.det(M)) > 1e-12 * np.abs(M).max() ** 2:
+                p = np.linalg.solve(M, h[[a, b]])
+                if np.all(G @ p >= h - tol):
+                    verts.append(p)
+    if not verts:
+        return np.zeros((0, 2))
+    P = np.array(verts)
+    c = P.mean(axis=0)
+    return P[np.argsort(np.arctan2(P[:, 1] - c[1], P[:, 0] - c[0]))]
+
 
 
 # ---------------------------------------------------------------------------------------

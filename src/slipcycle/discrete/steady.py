@@ -1,4 +1,4 @@
-"""Cycling to the steady state and its classification (SPEC §2).
+"""Cycling to the steady state and its classification.
 
 :func:`simulate` assembles the system (initial slip state or assembly protocol), then runs
 load cycles with the exact evolution of :mod:`~slipcycle.discrete.evolution` until the
@@ -26,9 +26,15 @@ from slipcycle.discrete.lcp import lemke
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 
-__all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState"]
+__all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
+           "STEADY_CLASSES", "STEADY_CODES"]
 
 STEADY_CLASSES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged")
+
+#: integer codes of ``steady_state`` in the stores of the basin maps and λ scans (position
+#: of the word): the classes of :func:`simulate`, then a start that is not admissible at
+#: θ = 0 and a run that failed
+STEADY_CODES = STEADY_CLASSES + ("inadmissible", "failed")
 
 
 class InadmissibleInitialState(ValueError):
@@ -124,7 +130,7 @@ class SteadyResult:
 
 def initial_state(system: FrictionalSystem, r_w: np.ndarray, v0: np.ndarray,
                   force_tol: float) -> np.ndarray:
-    """State x = [v0, w] at load r^w for an imposed slip v0 (SPEC §2, initial conditions).
+    """State x = [v0, w] at load r^w for an imposed slip v0.
 
     The separation w solves the contact LCP  w ≥ 0, p = p^w + B v0 + C w ≥ 0, wᵀp = 0
     (unique, C positive definite). Then every node must satisfy |q_j| ≤ f_j p_j.

@@ -21,16 +21,9 @@ from typing import Any
 import numpy as np
 
 from slipcycle.errors import InputError
+from slipcycle.registry import MODEL_COMMANDS
 
 __all__ = ["Case", "CaseError", "Section", "read_case", "parse_case_text", "MODEL_COMMANDS"]
-
-#: which commands serve which ``model`` (used to say where a case belongs)
-MODEL_COMMANDS = {
-    "halfspace": ("run", "map", "sweep"),
-    "discrete": ("run", "shakedown", "basins", "sweep"),
-    "rods": ("run", "limits", "sweep"),
-    "fe": ("reduce",),
-}
 
 #: a case file larger than this is not a case file (read before parsing)
 MAX_CASE_BYTES = 64 * 1024 * 1024

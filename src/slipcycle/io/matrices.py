@@ -8,7 +8,7 @@ A ``.mtx`` file holds the full reduced K (2N×2N); its degree-of-freedom orderin
 array ``dof_order``; ``.mtx``: a comment line ``% dof_order: interleaved``) or passed by
 the caller; when both are given they must agree.
 
-:func:`check_stiffness` applies the checks of SPEC §3 on import: A, B, C square N×N,
+:func:`check_stiffness` applies the import checks: A, B, C square N×N,
 finite, K = [[A, Bᵀ], [B, C]] symmetric (relative asymmetry ≤ ``rtol``; the symmetric
 part is used) and positive definite (Cholesky), load arrays (n_cases, N). Sign
 conventions: v tangential slip, w normal separation, p compressive positive,

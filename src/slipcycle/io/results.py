@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from slipcycle import __version__
+from slipcycle._version import __version__
 
 __all__ = ["RunOutputs", "write_outputs", "provenance", "to_jsonable", "check_output_dir",
            "check_output_file", "remove_stale_partials", "write_together"]

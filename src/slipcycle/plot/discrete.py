@@ -162,53 +162,6 @@ def hysteresis(ds) -> Figure:
     return fig
 
 
-def extreme_constraints(system, load, steps: int = 720):
-    """Extreme positions of the 2N all-contact friction constraints in v-space.
-
-    Constraint (j, s), s = ±1: s q_j + f_j p_j ≥ 0 with w = 0, i.e.
-    (s A_j + f_j B_j) · v ≥ −(s q^w_j(θ) + f_j p^w_j(θ)). Its extreme position is the largest
-    right-hand side over the cycle.
-
-    Returns
-    -------
-    G : (2N, N) array
-        Rows s A_j + f_j B_j [N/m].
-    h : (2N,) array
-        max over θ of the right-hand side [N]; the safe region is {v : G v ≥ h}.
-    """
-    n = system.n_nodes
-    th = np.linspace(0, 2 * np.pi, steps + 1)
-    r = load(th)
-    qw, pw = r[:, :n], r[:, n:]
-    f = system.friction
-    G, h = [], []
-    for j in range(n):
-        for s in (1.0, -1.0):
-            G.append(s * system.A[j] + f[j] * system.B[j])
-            h.append(np.max(-(s * qw[:, j] + f[j] * pw[:, j])))
-    return np.array(G), np.array(h)
-
-
-def safe_vertices(G: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """Vertices (k, 2) of the N = 2 safe region {v : G v ≥ h}, in counter-clockwise order
-    (empty when the region is empty or unbounded in the pairwise intersections)."""
-    verts = []
-    m = G.shape[0]
-    tol = 1e-9 * max(float(np.abs(h).max()), np.finfo(float).tiny)
-    for a in range(m):
-        for b in range(a + 1, m):
-            M = G[[a, b]]
-            if abs(np.linalg.det(M)) > 1e-12 * np.abs(M).max() ** 2:
-                p = np.linalg.solve(M, h[[a, b]])
-                if np.all(G @ p >= h - tol):
-                    verts.append(p)
-    if not verts:
-        return np.zeros((0, 2))
-    P = np.array(verts)
-    c = P.mean(axis=0)
-    return P[np.argsort(np.arctan2(P[:, 1] - c[1], P[:, 0] - c[0]))]
-
-
 #: the safe region gets a zoomed panel when its extent is below this fraction of the view
 ZOOM_BELOW = 0.2
 
@@ -232,22 +185,31 @@ def _draw_lines(ax, G, h, lo, hi, labels=None):
             ax.axvline(h[k] / g[0], lw=1, color=colors[k], label=lab)
 
 
-def v_space(system, load, result) -> Figure:
+def v_space(result, G: np.ndarray, h: np.ndarray, verts: np.ndarray) -> Figure:
     """N = 2: constraint lines at their extreme positions, safe region, trajectory.
 
     Axes are the slips v₀, v₁ of nodes 0 and 1 (numbered from 0 like the summary), in a
     unit scaled to the data. When the safe region is small against the view (a thin
     sliver next to the trajectory) a second panel zooms on it.
+
+    Parameters
+    ----------
+    result : SteadyResult
+        The run: ``x`` (cycles, steps, 2N) states, ``initial_state``, ``steady_state``.
+    G : (4, 2) array, h : (4,) array
+        The constraints at their extreme positions, {v : G v ≥ h} [N/m, N]
+        (:func:`slipcycle.discrete.shakedown.extreme_constraints`).
+    verts : (k, 2) array
+        Vertices of the safe region [m] (:func:`slipcycle.discrete.shakedown.safe_vertices`;
+        empty when there is none).
     """
-    n = system.n_nodes
+    n = G.shape[1]
     if n != 2:
         raise ValueError("v_space needs a two-node system")
-    G, h = extreme_constraints(system, load)
     v = result.x[:, :, :n].reshape(-1, n)
     v = np.vstack([result.initial_state[None, :n], v]) if result.initial_state is not None \
         else v
     lo, hi = v.min(axis=0), v.max(axis=0)
-    verts = safe_vertices(G, h)
     if len(verts):
         lo = np.minimum(lo, verts.min(axis=0))
         hi = np.maximum(hi, verts.max(axis=0))

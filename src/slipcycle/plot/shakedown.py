@@ -24,7 +24,7 @@ from slipcycle.plot import discrete as _discrete
 
 __all__ = ["safe_region_panels", "dissipation_vs_lambda", "basin_map", "CLASS_COLORS"]
 
-#: colours of the class codes of :data:`slipcycle.sweep.case.STEADY_CODES`
+#: colours of the class codes of :data:`slipcycle.discrete.steady.STEADY_CODES`
 CLASS_COLORS = ["#4caf50", "#e53935", "#8e24aa", "#fb8c00", "#e0e0e0", "#000000"]
 CLASS_NAMES = ["shakedown", "cyclic slip", "ratcheting", "not converged", "inadmissible",
                "failed"]
@@ -32,8 +32,6 @@ CLASS_NAMES = ["shakedown", "cyclic slip", "ratcheting", "not converged", "inadm
 
 def _draw_constraints(ax, region, lam, lo, hi, names, f=1.0):
     """Constraint lines and S(λ) in axes whose slips are in units of ``f`` metres."""
-    from slipcycle.discrete.shakedown import polygon_vertices
-
     G, h = region.G, region.h(lam) / f
     lo, hi = np.asarray(lo) / f, np.asarray(hi) / f
     xs = np.linspace(lo[0], hi[0], 2)
@@ -43,7 +41,7 @@ def _draw_constraints(ax, region, lam, lo, hi, names, f=1.0):
             ax.plot(xs, (h[k] - g[0] * xs) / g[1], lw=1, label=names[k] + "$^E$")
         else:
             ax.axvline(h[k] / g[0], lw=1, label=names[k] + "$^E$")
-    P = polygon_vertices(region, lam) / f
+    P = region.vertices(lam) / f
     if len(P) >= 3:
         ax.fill(P[:, 0], P[:, 1], color="#a5d6a7", zorder=0, label="safe region S(λ)")
     return P
@@ -55,6 +53,8 @@ def safe_region_panels(region, panels: list[dict], lam1: float, lam2: float) -> 
     Parameters
     ----------
     region : SafeRegion
+        Anything with ``G``, ``h(lam)``, ``names`` and ``vertices(lam)`` (S(λ) of
+        :func:`slipcycle.discrete.shakedown.safe_region`).
     panels : list of dict
         Each with ``lam`` (float) and ``trajectories``: list of (v (k, 2) [m], class str).
     lam1, lam2 : float
@@ -64,14 +64,12 @@ def safe_region_panels(region, panels: list[dict], lam1: float, lam2: float) -> 
     fig = Figure(figsize=(5.0 * k, 4.8))
     axes = np.atleast_1d(fig.subplots(1, k, squeeze=False)).ravel()
     # the constraint labels of the single-run picture (Barber's I–IV)
-    names = _constraint_names(region.n_nodes)
+    names = region.names
     for ax, pan in zip(axes, panels, strict=True):
         lam = pan["lam"]
         pts = [t[0] for t in pan["trajectories"]]
         allv = np.vstack(pts) if pts else np.zeros((0, 2))
-        from slipcycle.discrete.shakedown import polygon_vertices
-
-        P = polygon_vertices(region, lam)
+        P = region.vertices(lam)
         if len(P):
             allv = np.vstack([allv, P])
         lo, hi = allv.min(axis=0), allv.max(axis=0)
@@ -102,12 +100,6 @@ def safe_region_panels(region, panels: list[dict], lam1: float, lam2: float) -> 
                  "o start, ■ end", fontsize=10)
     fig.tight_layout()
     return fig
-
-
-def _constraint_names(n):
-    from slipcycle.discrete.shakedown import constraint_names
-
-    return constraint_names(n)
 
 
 def dissipation_vs_lambda(lam, dissipation, classes, lam1, lam2, b3, b4, refined=None,
@@ -187,7 +179,7 @@ def basin_map(v1, v2, classes, dissipation, region=None, lam=None) -> Figure:
         Class codes (rows: v2).
     dissipation : (n2, n1) array [J]
     region : SafeRegion, optional
-        Drawn at ``lam`` on top (the safe region S(λ)).
+        Drawn at ``lam`` on top (the safe region S(λ); anything with ``vertices(lam)``).
     """
     from matplotlib.patches import Patch
 
@@ -220,9 +212,7 @@ def basin_map(v1, v2, classes, dissipation, region=None, lam=None) -> Figure:
         handles.append(Patch(facecolor="none", hatch="xxx", edgecolor="k",
                              label="not converged (D of the last cycle run)"))
     if region is not None and lam is not None:
-        from slipcycle.discrete.shakedown import polygon_vertices
-
-        P = polygon_vertices(region, lam) / f
+        P = region.vertices(lam) / f
         if len(P) >= 3:
             for ax in (ax1, ax2):
                 ax.fill(np.r_[P[:, 0], P[0, 0]], np.r_[P[:, 1], P[0, 1]], fill=False,

@@ -13,8 +13,8 @@ step, or the wave impedance). With y = δ_new − δ_old this is
     Σ_i clip(t_i + κ_i y, ±c_i) + y / C = (δ_pred − δ_old) / C,
 
 a force-controlled step of the bed with one extra linear element of stiffness 1/C, which the
-half-space slider engine :func:`slipcycle.halfspace.kernels.solve_tangential_force` solves
-exactly (the kernel is reused unchanged). Rigid-plastic interfaces (``coulomb``, and
+Jenkins-bed kernel :func:`slipcycle.kernels.jenkins.solve_tangential_force` (shared with
+the half-space slider bed) solves exactly. Rigid-plastic interfaces (``coulomb``, and
 ``welded`` with infinite capacity) are the closed-form limit κ → ∞: T_new = clip(δ_pred −
 δ_old)/C, ±c).
 """
@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from slipcycle.halfspace.kernels import solve_tangential_force
+from slipcycle.kernels.jenkins import solve_tangential_force
 
 __all__ = ["bed_step", "integrate"]
 

@@ -2,7 +2,7 @@
 
 Each ``--set`` names a dotted key of the case (``loading.lam``, ``discrete.friction``,
 ``loading.p1[1]`` for one entry of a list) and its values; the sweep runs the case's model
-(:func:`slipcycle.cli.models.run_model`, any model: a halfspace case with
+(:func:`slipcycle.registry.run_model`, any model: a halfspace case with
 ``--set loading.Q1=… --set loading.phase=…`` gives a Ŵ map) for every combination and
 stores the numeric entries of each ``summary.json`` as one cell of a Zarr store
 (:mod:`slipcycle.sweep.core`). What the entries mean comes from the model's own result
@@ -21,30 +21,30 @@ import math
 import re
 from collections.abc import Mapping
 from functools import partial
+from pathlib import Path
 
 import numpy as np
 
-from slipcycle.io import Case, CaseError
+from slipcycle import registry
+from slipcycle.io import Case, CaseError, RunOutputs
 from slipcycle.io.case import parse_case_text
-from slipcycle.sweep.core import Axis, CellOutputs, SweepError, check_size, parse_values
+from slipcycle.sweep.core import (
+    Axis,
+    CellOutputs,
+    SweepError,
+    SweepStore,
+    check_size,
+    lock_store,
+    no_store_to_resume,
+    parse_values,
+    run_sweep,
+)
+from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
 __all__ = ["apply_overrides", "case_task", "parse_set", "validate_cells", "make_task",
-           "summary_numbers", "STEADY_CODES"]
-
-#: integer codes of ``steady_state`` in the stores of ``slipcycle basins`` and
-#: ``slipcycle shakedown`` (the compiled discrete cycle's classes); case sweeps take their
-#: codes from the model's ``RunOutputs.flags`` instead
-STEADY_CODES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged", "inadmissible",
-                "failed")
+           "summary_numbers", "sweep_outputs", "run_case_sweep", "StudyStatus"]
 
 _KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(\[(\d+)\])?$")
-
-_VALIDATORS = {
-    "discrete": "slipcycle.discrete.case:read_discrete_case",
-    "halfspace": "slipcycle.halfspace.case:parse_case",
-    "rods": "slipcycle.rods.case:parse_case",
-}
-
 
 def parse_set(items: list[str]) -> list[Axis]:
     """``["loading.lam=1:2:41", …]`` → axes. Raises :class:`SweepError` naming the option."""
@@ -106,8 +106,6 @@ def apply_overrides(data: dict, params: dict) -> dict:
 
 
 def _case_with(case_text: str, case_path, params: dict) -> Case:
-    from pathlib import Path
-
     base = parse_case_text(case_text, Path(case_path) if case_path else None)
     data = apply_overrides(base.data, params)
     return Case(model=data.get("model", base.model), data=data, text=case_text,
@@ -118,7 +116,6 @@ def validate_cells(case_text: str, case_path, axes: list[Axis], max_checked: int
                    ) -> None:
     """Validate the case with every cell's values (or a spread of ``max_checked`` cells
     including all corners) with the model's reader, before any computation."""
-    import importlib
     import itertools
 
     sizes = [a.size for a in axes]
@@ -132,14 +129,13 @@ def validate_cells(case_text: str, case_path, axes: list[Axis], max_checked: int
         spread = zip(*np.unravel_index(np.arange(0, total, step), sizes), strict=True)
         cells = sorted(corners | {tuple(int(i) for i in c) for c in spread})
     base = parse_case_text(case_text)
-    target = _VALIDATORS.get(base.model)
+    read = registry.validator(base.model)
     for cell in cells:
         params = {a.name: a.values[i] for a, i in zip(axes, cell, strict=True)}
         case = _case_with(case_text, case_path, params)
-        if target:
-            mod, fn = target.split(":")
+        if read is not None:
             try:
-                getattr(importlib.import_module(mod), fn)(case)
+                read(case)
             except CaseError as exc:
                 raise CaseError(exc.key, f"{exc.problem} (with "
                                 + ", ".join(f"{k} = {v}" for k, v in params.items())
@@ -224,10 +220,8 @@ def case_task(params: dict, case_text: str, case_path) -> dict:
     """Run the case with ``params`` applied; return :func:`summary_numbers` of its summary.
 
     Module-level so that process pools and Dask workers can unpickle it."""
-    from slipcycle.cli.models import run_model
-
     case = _case_with(case_text, case_path, params)
-    out = run_model(case)
+    out = registry.run_model(case)
     return summary_numbers(out.summary, getattr(out, "flags", None))
 
 
@@ -235,3 +229,91 @@ def make_task(case_text: str, case_path):
     """The picklable task of a case sweep."""
     return partial(case_task, case_text=case_text,
                    case_path=str(case_path) if case_path else None)
+
+
+def sweep_outputs(case: Case, store: SweepStore, axes: list[Axis], store_path) -> RunOutputs:
+    """Summary and Dataset of a finished case sweep.
+
+    Returns
+    -------
+    RunOutputs
+        ``summary``: ``model``, ``analysis`` ("sweep"), ``axes`` (name -> values),
+        ``runs``, ``store``, ``outputs`` (names), ``flags`` and ``units`` of the stored
+        outputs, ``dissipation_per_cycle`` ({min, max} over the cells [J], or None);
+        ``dataset``: :func:`~slipcycle.sweep.dataset.store_dataset`.
+    """
+    ds = store_dataset(store, axes)
+    data = store.read()
+    described = store.output_attrs
+    summary = {"model": case.model, "analysis": "sweep",
+               "axes": {a.name: list(a.values) for a in axes},
+               "runs": int(store.done().size), "store": str(store_path),
+               "outputs": sorted(data),
+               "flags": {k: v["flag_meanings"].split() for k, v in described.items()
+                         if "flag_meanings" in v},
+               "units": {k: v["units"] for k, v in described.items() if "units" in v}}
+    d = data.get("dissipation_per_cycle")
+    if d is not None and d.dtype.kind == "f" and np.isfinite(d).any():
+        summary["dissipation_per_cycle"] = {"min": float(np.nanmin(d)),
+                                            "max": float(np.nanmax(d))}
+    else:
+        summary["dissipation_per_cycle"] = None
+    return RunOutputs(summary=summary, dataset=ds)
+
+
+def run_case_sweep(case: Case, sets: list[str], out, *, resume: bool = False,
+                   workers: int | None = None, scheduler=None, progress: bool = True,
+                   stop_after: int | None = None, write=None) -> StudyStatus:
+    """Run ``case`` for every combination of the ``sets`` values into ``out/sweep.zarr``.
+
+    Parameters
+    ----------
+    case : Case
+        A case of any model that :mod:`slipcycle.registry` runs.
+    sets : list of str
+        ``"key=start:stop:num"`` or ``"key=a,b,c"`` (dotted case keys, ``key[i]`` for a
+        list entry); one sweep axis each, Cartesian product.
+    out : path
+        Output directory; the store is ``out/sweep.zarr``.
+    resume : bool
+        Complete an interrupted sweep (its store must exist).
+    workers, scheduler, progress, stop_after
+        See :func:`~slipcycle.sweep.core.run_sweep`.
+    write : callable, optional
+        ``write(outputs)``, called with the finished results while the store is still
+        locked (so that a second sweep on ``out`` stops at once until they are written).
+
+    Returns
+    -------
+    StudyStatus
+        ``outputs`` (see :func:`sweep_outputs`) once every cell is done.
+
+    Raises
+    ------
+    CaseError
+        A refused option or cell, before any computation.
+    """
+    store_path = Path(out) / "sweep.zarr"
+    try:
+        axes = parse_set(sets)
+        validate_cells(case.text, case.path, axes)
+        if resume and not store_path.exists():
+            raise no_store_to_resume(store_path)
+        # held until the outputs are written: a second sweep on --out stops at once
+        with lock_store(store_path):
+            store = run_sweep(make_task(case.text, case.path), axes, store_path,
+                              description={"case": case.text, "command": "sweep",
+                                           # codes and units from the model's flags
+                                           # (stores of older versions are not resumed)
+                                           "store_format": 2},
+                              resume=resume, workers=workers, scheduler=scheduler,
+                              progress=progress, stop_after=stop_after)
+            done = store.done()
+            if not done.all():
+                return StudyStatus(None, int(done.sum()), int(done.size))
+            outputs = sweep_outputs(case, store, axes, store_path)
+            if write is not None:
+                write(outputs)
+    except SweepError as exc:
+        raise as_case_error(exc) from None
+    return StudyStatus(outputs, int(done.size), int(done.size))

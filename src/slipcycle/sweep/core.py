@@ -836,7 +836,8 @@ def _run_pool(fn, axes, tasks, workers, writer, pool):
             submit(task)
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in finished:
+            # keep every success of this batch before a failure in it propagates
+            for fut in sorted(finished, key=lambda f: f.exception() is not None):
                 task = pending.pop(fut)
                 writer.put(task, fut.result())
                 nxt = next(it, None)

@@ -1,0 +1,1 @@
+"""Compiled kernels shared by several models (Numba, ``cache=True``)."""

@@ -1,0 +1,84 @@
+"""The package layering of docs/architecture.md holds: a wrong-way import fails here.
+
+The contracts live in ``pyproject.toml`` (``[tool.importlinter]``); import-linter reads
+every import, function-local ones included, so no contract can be kept by hiding an import
+inside a function.
+"""
+
+from __future__ import annotations
+
+import ast
+import contextlib
+import io
+import os
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("importlinter", reason="needs the test extra")
+from importlinter.cli import EXIT_STATUS_SUCCESS, lint_imports  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src" / "slipcycle"
+
+
+def test_import_contracts_are_kept():
+    out = io.StringIO()
+    cwd = os.getcwd()
+    try:
+        os.chdir(ROOT)
+        with contextlib.redirect_stdout(out):
+            status = lint_imports(config_filename=str(ROOT / "pyproject.toml"),
+                                  no_cache=True, no_logo=True)
+    finally:
+        os.chdir(cwd)
+    assert status == EXIT_STATUS_SUCCESS, ("an import breaks the layering of "
+                                           "docs/architecture.md:\n" + out.getvalue())
+
+
+def _imported_slipcycle_packages(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names = [node.module]
+        elif isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        else:
+            continue
+        for name in names:
+            parts = name.split(".")
+            if parts[0] == "slipcycle" and len(parts) > 1:
+                found.add(parts[1])
+    return found
+
+
+def test_no_package_cycles():
+    """Top-level packages (and modules) of slipcycle import each other without a cycle."""
+    graph: dict[str, set[str]] = {}
+    for path in SRC.rglob("*.py"):
+        rel = path.relative_to(SRC).parts
+        pkg = rel[0].removesuffix(".py")
+        graph.setdefault(pkg, set()).update(_imported_slipcycle_packages(path) - {pkg})
+    state: dict[str, int] = {}
+
+    def visit(node, stack):
+        state[node] = 1
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == 1:
+                cycle = stack[stack.index(nxt):] + [nxt]
+                pytest.fail("package cycle: " + " -> ".join(cycle))
+            if state.get(nxt) is None:
+                visit(nxt, stack + [nxt])
+        state[node] = 2
+
+    for node in sorted(graph):
+        if state.get(node) is None:
+            visit(node, [node])
+
+
+def test_command_modules_only_parse_call_and_print():
+    """Every analysis lives in the library: the command modules stay short."""
+    for path in sorted((SRC / "cli").glob("cmd_*.py")):
+        lines = len(path.read_text(encoding="utf-8").splitlines())
+        assert lines <= 130, f"{path.name} has {lines} lines"
