@@ -1,4 +1,4 @@
-"""The discrete model through the CLI: example, outputs, refused inputs (SPEC §6)."""
+"""The discrete model through the CLI: example, outputs, refused inputs."""
 
 from __future__ import annotations
 

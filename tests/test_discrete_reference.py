@@ -1,4 +1,4 @@
-"""Event-driven solver against a brute-force reference (SPEC §2, issue 3 item 7).
+"""Event-driven solver against a brute-force reference (issue 3 item 7).
 
 The reference is written here, independently of the solver: the backward-Euler incremental
 problem of every small load step is solved by enumerating all 4^N node states (stick,

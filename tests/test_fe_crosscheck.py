@@ -1,4 +1,4 @@
-"""Cross-check of the two theories (issue 6, item 4; SPEC §2–§4).
+"""Cross-check of the two theories (issue 6, item 4).
 
 A 2-D Hertzian contact (:func:`~slipcycle.fe.builders.cylinder_on_block`, steel-like
 E = 210 GPa, ν = 0.49 for both bodies, mixed P2–P0 formulation) is reduced to A, B, C and

@@ -1,4 +1,4 @@
-"""History dependence of a coupled reduced FE model (issue 6, item 3; SPEC §2).
+"""History dependence of a coupled reduced FE model (issue 6, item 3).
 
 The rectangular steel block of ``examples/fe_block_nu03.toml`` (ν = 0.3, complete
 contact on a rigid flat, 9 contact nodes, Dundurs β = 0.29 so B ≠ 0) is reduced and run

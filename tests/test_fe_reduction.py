@@ -1,4 +1,4 @@
-"""Static reduction (SPEC §3): SPD, independent full-FE checks, reciprocity, patch test,
+"""Static reduction: SPD, independent full-FE checks, reciprocity, patch test,
 coupling limits, mesh convergence."""
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Coupled discrete frictional systems under periodic loading (SPEC §2, seed 001 §3).
+"""Coupled discrete frictional systems under periodic loading (J. R. Barber, J. Phys.:
+Conf. Ser. 382 (2012) 012002, §3; A. Klarbring, Ing.-Arch. 60 (1990) 529–541 for f_crit).
 
 - :mod:`~slipcycle.discrete.model`      :class:`FrictionalSystem` (A, B, C, f), validation
 - :mod:`~slipcycle.discrete.loads`      p^w(θ), q^w(θ): harmonic, tabulated, load cases

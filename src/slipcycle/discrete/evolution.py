@@ -1,4 +1,4 @@
-"""Event-driven exact quasi-static evolution along a piecewise-linear load path (SPEC §2).
+"""Event-driven exact quasi-static evolution along a piecewise-linear load path.
 
 On a linear segment of the load path the load rate ṙ^w is constant, so the solution of
 the rate problem (:class:`~slipcycle.discrete.rate.RateSolver`) stays constant until an

@@ -2,7 +2,7 @@
 
 :func:`steady_state_fast` does what :func:`slipcycle.discrete.steady.simulate` does for a
 run that starts from an initial slip state and **keeps every node in contact** — the
-setting of the safe-region theory (seed 001 §3) — but in one Numba kernel with no Python
+setting of the safe-region theory (Barber 2012, §3) — but in one Numba kernel with no Python
 work per event, so a 2-node run costs microseconds instead of tens of milliseconds.
 
 Method (same as :mod:`~slipcycle.discrete.evolution`, restricted to contact): on each

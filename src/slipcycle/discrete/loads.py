@@ -1,4 +1,4 @@
-"""Loads of a discrete system: p^w(θ), q^w(θ) per node (SPEC §1, §2).
+"""Loads of a discrete system: p^w(θ), q^w(θ) per node.
 
 The reactions with every node held at v = w = 0 are
 

@@ -1,4 +1,6 @@
-"""The coupled discrete frictional system (SPEC §2, seed 001 §3).
+"""The coupled discrete frictional system (J. R. Barber, "Frictional systems under periodic
+loads — history-dependence, non-uniqueness and energy dissipation", J. Phys.: Conf. Ser. 382
+(2012) 012002, §3).
 
 N contact nodes of a 2-D elastic body, reduced to the contact degrees of freedom:
 
@@ -79,12 +81,25 @@ class FrictionalSystem:
         Normal stiffness [N/m], symmetric positive definite.
     friction : float or (N,) array_like
         Coulomb coefficient f ≥ 0 of each node.
+    accept_ill_posed : bool or None, optional
+        ``False``: refuse f ≥ f_crit, the critical friction coefficient below which the
+        rate problem has a unique solution (A. Klarbring, "Examples of non-uniqueness and
+        non-existence of solutions to quasistatic contact problems with friction",
+        Ing.-Arch. 60 (1990) 529–541; P-matrix condition, see
+        :func:`~slipcycle.discrete.wellposed.critical_friction`). ``True``: accept it
+        (the solvers may then stop with :class:`~slipcycle.errors.SolverError`).
+        ``None`` (default, for compatibility): not checked here; the case-file reader and
+        ``slipcycle run`` check it, Python callers should pass ``False``.
+    f_crit_exact_max_nodes : int, optional
+        Largest N for which f_crit is computed exactly (else a lower bound is used);
+        only with ``accept_ill_posed=False``.
 
     Raises
     ------
     ModelError
         Naming the matrix and the failed property (shape, finiteness, symmetry, positive
-        definiteness of A, C or of the whole K = [[A, Bᵀ], [B, C]], f < 0).
+        definiteness of A, C or of the whole K = [[A, Bᵀ], [B, C]], f < 0, and with
+        ``accept_ill_posed=False`` f ≥ f_crit, keyed ``friction``).
     """
 
     A: np.ndarray
@@ -92,6 +107,8 @@ class FrictionalSystem:
     C: np.ndarray
     friction: np.ndarray
     K: np.ndarray = field(init=False, repr=False, compare=False)
+    accept_ill_posed: bool | None = field(default=None, compare=False)
+    f_crit_exact_max_nodes: int = field(default=10, compare=False, repr=False)
 
     def __post_init__(self):
         A = _square("A", self.A, None)
@@ -129,6 +146,25 @@ class FrictionalSystem:
             val = np.array(val, dtype=float)
             val.setflags(write=False)
             object.__setattr__(self, name, val)
+        if self.accept_ill_posed not in (None, True, False):
+            raise ModelError("accept_ill_posed", "must be True, False or None")
+        if self.accept_ill_posed is False:
+            self._check_well_posed()
+
+    def _check_well_posed(self) -> None:
+        from slipcycle.discrete.wellposed import critical_friction
+
+        fc = critical_friction(self.A, self.B, self.friction,
+                               exact_max_nodes=self.f_crit_exact_max_nodes)
+        fmax = float(np.max(self.friction))
+        if fmax >= fc.f_crit:
+            # the message of the case-file reader (discrete.friction)
+            raise ModelError("friction",
+                             f"f = {fmax:g} is not below the critical friction coefficient "
+                             f"f_crit = {fc.f_crit:.6g} ({fc.method}; nodes {list(fc.nodes)}, "
+                             f"slip signs {list(fc.signs)}): the rate problem is ill posed "
+                             "(Klarbring P-matrix condition). Pass accept_ill_posed=True to "
+                             "run anyway")
 
     @property
     def n_nodes(self) -> int:

@@ -1,4 +1,4 @@
-"""The rate problem of a discrete frictional system (SPEC §2).
+"""The rate problem of a discrete frictional system.
 
 At an instant where the state ``x = [v, w]`` and the reactions ``r = [q, p]`` are known and
 the load rate ``ṙ^w = [q̇^w, ṗ^w]`` (per radian of θ) is constant, find the node states

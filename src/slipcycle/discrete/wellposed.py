@@ -1,4 +1,4 @@
-"""Well-posedness of the rate problem: the critical friction coefficient (SPEC §2).
+"""Well-posedness of the rate problem: the critical friction coefficient.
 
 With all nodes in contact, a set I of nodes slipping with directions S = diag(±1) moves
 at rates given by the principal submatrix (A + f S B)_II. The rate problem (a linear

@@ -1,4 +1,4 @@
-"""Geometries of SPEC §3 as ready-to-reduce :class:`~slipcycle.fe.reduction.Problem` s.
+"""Generated geometries as ready-to-reduce :class:`~slipcycle.fe.reduction.Problem` s.
 
 Every generated geometry has its interface on y = 0, body 1 above it (n = (0, 1),
 t = (1, 0)), and is loaded through the top face of body 1 in one of three ways

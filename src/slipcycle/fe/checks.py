@@ -1,4 +1,4 @@
-"""Diagnostics of a reduced model: coupling measures (SPEC §3 checks).
+"""Diagnostics of a reduced model: coupling measures (import checks).
 
 References
 ----------

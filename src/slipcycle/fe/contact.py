@@ -1,6 +1,6 @@
 """Contact nodes: identification, pairing and the relative displacements v, w.
 
-Sign conventions (SPEC §2)
+Sign conventions
 --------------------------
 Body 1 is the body whose contact nodes are listed; body 2 is the opposing body, or a
 rigid flat that does not move. ``normal`` n is the unit vector pointing from body 2 into

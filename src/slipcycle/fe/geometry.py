@@ -1,4 +1,4 @@
-"""Mesh builders for the generated geometries of SPEC §3.
+"""Mesh builders for the generated geometries.
 
 All geometries are 2-D (x along the interface, y normal to it, interface at y = 0) and
 are meshed as mapped, graded tensor grids split into triangles, so that the nodes of two

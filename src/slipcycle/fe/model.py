@@ -144,7 +144,7 @@ def read_discrete_table(fe: Section) -> dict | None:
 
 def discrete_case_text(table: dict, reduced: ReducedModel, stiffness_file: str,
                        key: str = "fe.discrete") -> str:
-    """A discrete case (SPEC §6) driven by combinations of the basic load cases.
+    """A discrete case file (docs/discrete.md) driven by combinations of the basic load cases.
 
     p^w(θ) = Σ_c mean_c p_c + λ Re[Σ_c amplitude_c e^{i phase_c} p_c e^{iθ}] per node
     (the gap case enters the mean with factor 1 unless set), and likewise q^w; written

@@ -1,4 +1,4 @@
-"""From an assembled finite-element problem to A, B, C and p^w, q^w (SPEC §2–§3).
+"""From an assembled finite-element problem to A, B, C and p^w, q^w.
 
 The global displacement vector is written as u = T z + u₀ with z = [y; d]:
 

@@ -12,6 +12,7 @@ from slipcycle.halfspace.bed import SliderBed, make_bed
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.history import HistoryResult, run_history
 from slipcycle.halfspace.loads import contact_loads
+from slipcycle.halfspace.model import HalfspaceModel, solve
 from slipcycle.halfspace.profiles import (
     Cylinder2D,
     FlatPunch,
@@ -23,7 +24,7 @@ from slipcycle.halfspace.profiles import (
 )
 
 __all__ = [
-    "ContactElasticity", "Cylinder2D", "FlatPunch", "HistoryResult", "PowerLaw", "Profile",
-    "RoughExponential", "SliderBed", "Tabulated", "contact_loads", "make_bed", "run_history",
-    "sphere",
+    "ContactElasticity", "Cylinder2D", "FlatPunch", "HalfspaceModel", "HistoryResult",
+    "PowerLaw", "Profile", "RoughExponential", "SliderBed", "Tabulated", "contact_loads",
+    "make_bed", "run_history", "solve", "sphere",
 ]

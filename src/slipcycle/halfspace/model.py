@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from slipcycle.errors import InputError
 from slipcycle.halfspace.bed import SliderBed, lumped_slider_slipped, lumping_load, make_bed
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.history import HistoryResult, run_history
@@ -40,6 +41,21 @@ class HalfspaceModel:
     steps_per_cycle, max_cycles, n_sliders, assembly_steps : int
     snapshots : (m,) array
         Cycle angles (rad) at which tractions are reported.
+    steady_tol : float
+        Relative change of the cycle below which the history is steady, in (0, 1).
+    profile_name : str
+        Name of the profile in results (informative).
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        Keyed by the field name, at construction: a profile without a normal law, f ≤ 0,
+        λ_c ≤ 0, non-finite numbers, an unknown control, a protocol that is not (S, 2),
+        settings out of range (steps_per_cycle ≥ 8, max_cycles ≥ 1, n_sliders ≥ 10,
+        assembly_steps ≥ 1, snapshots in [0, 2π], 0 < steady_tol < 1). The load path
+        (a tensile or never compressive normal load, a rough contact unloaded, a table
+        or cylinder reference depth too short for the loads) is checked by
+        :meth:`check_loads`, which :func:`solve` calls first.
     """
 
     profile: object
@@ -58,6 +74,89 @@ class HalfspaceModel:
     snapshots: np.ndarray = field(default_factory=lambda: np.array([0.0, np.pi / 2, np.pi]))
     steady_tol: float = 1e-9
     profile_name: str = ""
+
+    def __post_init__(self):
+        if not callable(getattr(self.profile, "approach", None)):
+            raise InputError("profile", "must be a normal law P(U) (a slipcycle.halfspace "
+                                        f"Profile), got {type(self.profile).__name__}")
+        if self.elasticity is not None and not isinstance(self.elasticity, ContactElasticity):
+            raise InputError("elasticity", "must be a ContactElasticity or None")
+        _positive("friction", self.friction)
+        _positive("compliance_ratio", self.compliance_ratio)
+        for name in ("normal", "tangential"):
+            if not callable(getattr(self, name)):
+                raise InputError(name, "must be a periodic load (HarmonicLoad or "
+                                       "TabulatedLoad; see contact_loads)")
+        if self.normal_control not in ("force", "approach"):
+            raise InputError("normal_control", "must be 'force' or 'approach', got "
+                                               f"{self.normal_control!r}")
+        if self.tangential_control not in ("force", "displacement"):
+            raise InputError("tangential_control", "must be 'force' or 'displacement', "
+                                                   f"got {self.tangential_control!r}")
+        protocol = _finite_array("protocol", self.protocol)
+        if protocol.size == 0:
+            protocol = protocol.reshape(0, 2)
+        if protocol.ndim != 2 or protocol.shape[1] != 2:
+            raise InputError("protocol", "must be an (S, 2) array of (normal, tangential) "
+                                         f"states, got shape {protocol.shape}")
+        snaps = np.atleast_1d(_finite_array("snapshots", self.snapshots))
+        if snaps.ndim != 1 or np.any(snaps < 0) or np.any(snaps > 2 * np.pi):
+            raise InputError("snapshots", "must be cycle angles in [0, 2π] rad")
+        for name, low in (("steps_per_cycle", 8), ("max_cycles", 1), ("n_sliders", 10),
+                          ("assembly_steps", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or value < low:
+                raise InputError(name, f"must be an integer >= {low}, got {value!r}")
+        tol = self.steady_tol
+        if not (isinstance(tol, (int, float, np.floating)) and 0.0 < tol < 1.0):
+            raise InputError("steady_tol", f"must be in (0, 1), got {tol!r}")
+        object.__setattr__(self, "protocol", protocol)
+        object.__setattr__(self, "snapshots", snaps)
+
+    def check_loads(self) -> None:
+        """Refuse a load path the contact cannot carry.
+
+        In force control the normal load must compress the contact somewhere and never
+        become tensile (adhesion is not modelled); a rough (exponential) contact needs
+        P > 0 throughout; a 2-D cylinder's reference depth and a tabulated law must cover
+        the largest load.
+
+        Returns
+        -------
+        None
+
+        Raises
+        ------
+        slipcycle.errors.InputError
+            ``normal`` (cycle), ``protocol`` (assembly states), ``profile``.
+        """
+        from slipcycle.halfspace.profiles import Cylinder2D, RoughExponential, Tabulated
+
+        if self.normal_control != "force":
+            return
+        _, cycle_n, _ = self.cycle_samples()
+        lo, hi = self.normal_load_range()
+        if not np.isfinite(lo) or not np.isfinite(hi):
+            raise InputError("normal", "the normal load must be finite")
+        if hi <= 0:
+            raise InputError("normal", "the normal load never compresses the contact")
+        rough = isinstance(self.profile, RoughExponential)
+        states = [("normal", float(cycle_n.min()))]
+        states += [(f"protocol[{i}]", float(v)) for i, v in enumerate(self.protocol[:, 0])]
+        for key, v in states:
+            if rough and v <= 0:
+                raise InputError(key, "a rough contact needs P > 0 throughout the load "
+                                      f"path (minimum {v:g} N)")
+            if v < 0:
+                raise InputError(key, f"normal load becomes tensile (minimum {v:g} N); "
+                                      "adhesion is not modelled")
+        if isinstance(self.profile, Cylinder2D) and hi >= self.profile.max_load():
+            raise InputError("profile", "the cylinder's reference depth is too shallow for "
+                                        "the largest load: the plane approach needs a < 2d/e")
+        if isinstance(self.profile, Tabulated) and hi > self.profile.P[-1] * (1 + 1e-12):
+            raise InputError("profile", f"table ends at {self.profile.P[-1]:g} N but the "
+                                        f"loads reach {hi:g} N")
 
     @classmethod
     def harmonic(cls, profile, friction: float, compliance_ratio: float, *, P0: float,
@@ -151,6 +250,22 @@ class HalfspaceModel:
                         n_sliders=self.n_sliders, P_lo=P_lo)
 
 
+def _positive(name: str, value) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(value) or not value > 0:
+        raise InputError(name, f"must be a finite number > 0, got {value!r}")
+
+
+def _finite_array(name: str, value) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(name, "must be an array of numbers") from None
+    if not np.all(np.isfinite(arr)):
+        raise InputError(name, "must contain only finite numbers")
+    return arr
+
+
 def _load_from_approach(profile, U: float) -> float:
     from scipy.optimize import brentq
 
@@ -162,7 +277,35 @@ def _load_from_approach(profile, U: float) -> float:
 
 def solve(model: HalfspaceModel, *, record_last_cycle: bool = True
           ) -> tuple[SliderBed, HistoryResult]:
-    """Build the slider bed and run the assembly and cycles to a steady state."""
+    """Build the slider bed and run the assembly and cycles to a steady state.
+
+    The contact is a bed of independent Coulomb sliders (the Ciavarella–Jäger
+    superposition of Cattaneo–Mindlin solutions: C. Cattaneo 1938, R. D. Mindlin 1949,
+    M. Ciavarella, Int. J. Solids Struct. 35 (1998) 2349–2362, J. Jäger, Wear 220 (1998)
+    1–8), driven exactly along the piecewise-linear load path.
+
+    Parameters
+    ----------
+    model : HalfspaceModel
+        The validated contact and its loads; its load path is checked first
+        (:meth:`HalfspaceModel.check_loads`).
+    record_last_cycle : bool, optional
+        Keep every slider's force and slip over the last cycle (needed for tractions).
+
+    Returns
+    -------
+    bed : SliderBed
+        The sliders (levels, stiffnesses, capacities) the history ran on.
+    result : HistoryResult
+        Load path, U, V, P, Q per step (m, m, N, N), dissipation per cycle (J),
+        steady-state flag and gross-slip detection.
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        A load path the contact cannot carry.
+    """
+    model.check_loads()
     bed = model.bed()
     result = _run(model, bed, record_last_cycle)
     if not model.has_first_touch() and bed.size > 1 and bed.level[0] < bed.level[1] \

@@ -21,21 +21,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from slipcycle.errors import InputError
+
 __all__ = ["Rod", "TwoRods", "Excitation", "INTERFACES"]
 
 INTERFACES = ("welded", "distributed", "coulomb", "jenkins", "iwan")
 
 
-def _check(name: str, value: float, *, gt: float | None = None, ge: float | None = None,
-           le: float | None = None) -> None:
+def _check(name: str, value, *, gt: float | None = None, ge: float | None = None,
+           le: float | None = None, lt: float | None = None) -> None:
+    """Refuse (:class:`~slipcycle.errors.InputError` keyed by the field ``name``) a value
+    that is not a finite real number within the bounds."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(name, f"must be a real number, got {value!r}")
+    value = float(value)
     if not math.isfinite(value):
-        raise ValueError(f"{name}: must be finite, got {value}")
+        raise InputError(name, f"must be finite, got {value}")
     if gt is not None and not value > gt:
-        raise ValueError(f"{name}: must be > {gt:g}, got {value:g}")
+        raise InputError(name, f"must be > {gt:g}, got {value:g}")
     if ge is not None and not value >= ge:
-        raise ValueError(f"{name}: must be >= {ge:g}, got {value:g}")
+        raise InputError(name, f"must be >= {ge:g}, got {value:g}")
     if le is not None and not value <= le:
-        raise ValueError(f"{name}: must be <= {le:g}, got {value:g}")
+        raise InputError(name, f"must be <= {le:g}, got {value:g}")
+    if lt is not None and not value < lt:
+        raise InputError(name, f"must be < {lt:g}, got {value:g}")
 
 
 @dataclass(frozen=True)
@@ -54,6 +63,12 @@ class Rod:
         Poisson's ratio, −1 < ν ≤ 0.5.
     density : float
         ρ (kg/m³).
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        Keyed by the field name: a length, radius, modulus or density that is not a finite
+        positive number, or ν outside (−1, 0.5].
     """
 
     length: float
@@ -63,7 +78,7 @@ class Rod:
     density: float
 
     def __post_init__(self):
-        _check("L", self.length, gt=0.0)
+        _check("length", self.length, gt=0.0)
         _check("radius", self.radius, gt=0.0)
         _check("E", self.E, gt=0.0)
         _check("nu", self.nu, gt=-1.0, le=0.5)
@@ -127,7 +142,14 @@ class TwoRods:
         ``coulomb``.
     damping_ratio : float
         Modal damping ratio ζ of every torsional mode (and the loss factor 2ζ of the axial
-        frequency response).
+        frequency response), 0 ≤ ζ ≤ 1.
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        Keyed by the field name: rods that are not :class:`Rod`, f < 0 or not finite, an
+        unknown interface, a missing or non-positive ``interface_stiffness`` for the
+        ``distributed``, ``jenkins`` and ``iwan`` interfaces, ζ outside [0, 1].
     """
 
     rod1: Rod
@@ -138,10 +160,17 @@ class TwoRods:
     damping_ratio: float = 0.0
 
     def __post_init__(self):
+        for name in ("rod1", "rod2"):
+            if not isinstance(getattr(self, name), Rod):
+                raise InputError(name, f"must be a Rod, got {type(getattr(self, name)).__name__}")
         _check("friction", self.friction, ge=0.0)
         if self.interface not in INTERFACES:
-            raise ValueError(f"interface: must be one of {INTERFACES}, got {self.interface!r}")
+            raise InputError("interface", f"must be one of {INTERFACES}, got "
+                                          f"{self.interface!r}")
         if self.interface in ("distributed", "jenkins", "iwan"):
+            if self.interface_stiffness == math.inf:
+                raise InputError("interface_stiffness", "required for interface = "
+                                                        f"{self.interface!r} (k_t, N/m³)")
             _check("interface_stiffness", self.interface_stiffness, gt=0.0)
         _check("damping_ratio", self.damping_ratio, ge=0.0, le=1.0)
 
@@ -215,6 +244,12 @@ class Excitation:
         F_a (N) of F(t) = F0 + F_a sin(Ωt + ψ).
     axial_phase : float
         ψ (rad).
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        Keyed by the field name: a negative or non-finite amplitude, a tensile mean axial
+        force (F0 < 0; the interface cannot carry tension), Ω ≤ 0.
     """
 
     rotation_amplitude: float
