@@ -20,10 +20,8 @@ def _public(pkg):
 #: its docstring gains Parameters/Returns). halfspace/discrete ones wait for the module
 #: moves of the command-line refactor.
 UNDOCUMENTED = {
-    "slipcycle.halfspace." + n for n in (
-        "Cylinder2D", "FlatPunch", "PowerLaw", "Profile", "RoughExponential", "Tabulated",
-        "make_bed", "run_history", "sphere")
-} | {"slipcycle.discrete.ModelError"} | {
+    "slipcycle.halfspace." + n for n in ("make_bed",)
+} | {
     "slipcycle.rods." + n for n in (
         "RodsCase", "analyse", "interface_bed", "make_bed", "fit_iwan", "omega1",
         "natural_frequencies", "modal_basis", "steady_state", "quasi_static_loop",

@@ -31,8 +31,15 @@ STATE_NAMES = ("stick", "slip_positive", "slip_negative", "separated")
 
 
 class ModelError(InputError):
-    """An invalid model. ``name`` (= ``key``) is the matrix or parameter at fault (``"A"``,
-    ``"friction"``)."""
+    """An invalid model.
+
+    Parameters
+    ----------
+    name : str
+        The matrix or parameter at fault (``"A"``, ``"friction"``); also ``key``.
+    problem : str
+        What is wrong, in words.
+    """
 
     def __init__(self, name: str, problem: str):
         super().__init__(name, problem)

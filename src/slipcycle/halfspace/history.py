@@ -122,6 +122,7 @@ def run_history(
     tangential_control : {"force", "displacement"}
         Whether the tangential arrays are Q (N) or V (m).
     max_cycles, min_cycles : int
+        Largest and smallest number of cycles run.
     steady_tol : float
         Steady when max|t_end − t_start| ≤ steady_tol · max_i f n_i.
     record_last_cycle : bool
@@ -130,6 +131,12 @@ def run_history(
         Approach of the unloaded state the assembly starts from (m); defaults to the first
         touch of the bed, ``bed.approach(0)``. Sliders touching during a step take their
         share of that step's tangential increment from the moment they touch.
+
+    Returns
+    -------
+    HistoryResult
+        U, V, P, Q per step, slider state, per-cycle dissipation, steady-state flag and,
+        if gross slip occurred, where (Ciavarella 1998; Jäger 1998).
     """
     force_control = tangential_control == "force"
     if normal_control == "force":

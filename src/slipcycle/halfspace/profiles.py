@@ -26,7 +26,15 @@ __all__ = ["Profile", "PowerLaw", "sphere", "Cylinder2D", "FlatPunch", "RoughExp
 
 
 class Profile(Protocol):
-    """What a contact profile must provide (all functions vectorised over P)."""
+    """What a contact profile must provide (all functions vectorised over P).
+
+    Attributes
+    ----------
+    plane : bool
+        2-D problem: loads are per unit length (N/m) and dissipation in J/m.
+    axisymmetric : bool
+        Tractions by Abel transform are available (Popov & Heß 2015).
+    """
 
     plane: bool          # 2-D problem: loads per unit length
     axisymmetric: bool   # tractions by Abel transform are available
@@ -52,6 +60,17 @@ class PowerLaw:
     g(x) = κ_n c |x|ⁿ with κ_n = √π Γ(n/2 + 1)/Γ(n/2 + 1/2), so that
     a(U) = (U/(κ_n c))^{1/n} and P(U) = 2E* U a n/(n + 1)  (Popov & Heß 2015, §3).
     The sphere of radius R is n = 2, c = 1/(2R): a² = RU, P = (4/3)E* R^{1/2} U^{3/2}.
+
+    Attributes
+    ----------
+    c : float
+        Profile coefficient, m^(1−n).
+    n : float
+        Exponent (> 0; 2 for the sphere).
+    contact_modulus : float
+        E* in Pa.
+    plane, axisymmetric : bool
+        False, True (see :class:`Profile`).
     """
 
     c: float
@@ -86,7 +105,20 @@ class PowerLaw:
 
 
 def sphere(radius: float, contact_modulus: float) -> PowerLaw:
-    """Hertzian sphere of radius R (m): z = r²/(2R)."""
+    """Hertzian sphere: z = r²/(2R) (Hertz 1882; Johnson 1985, §4.2).
+
+    Parameters
+    ----------
+    radius : float
+        R in m.
+    contact_modulus : float
+        E* in Pa.
+
+    Returns
+    -------
+    PowerLaw
+        n = 2, c = 1/(2R).
+    """
     return PowerLaw(c=1.0 / (2.0 * radius), n=2.0, contact_modulus=contact_modulus)
 
 
@@ -99,6 +131,17 @@ class Cylinder2D:
     U = (P/(πE*)) [ln(4d²/a²) − 1] (Johnson 1985, eq. 5.41 form), so the incremental
     compliance C = (ln(4d²/a²) − 2)/(πE*). The dissipation does not depend on d (Barber 2012,
     §4.5); d defaults to R. Valid while C > 0, i.e. a < 2d/e.
+
+    Attributes
+    ----------
+    radius : float
+        R in m.
+    contact_modulus : float
+        E* in Pa.
+    reference_depth : float or None
+        d in m (None: d = R).
+    plane, axisymmetric : bool
+        True, False (see :class:`Profile`).
     """
 
     radius: float
@@ -138,7 +181,17 @@ class Cylinder2D:
 
 @dataclass(frozen=True)
 class FlatPunch:
-    """Rigid flat circular punch of radius a (3-D): P = 2E* a U (Boussinesq)."""
+    """Rigid flat circular punch of radius a (3-D): P = 2E* a U (Boussinesq).
+
+    Attributes
+    ----------
+    radius : float
+        a in m.
+    contact_modulus : float
+        E* in Pa.
+    plane, axisymmetric : bool
+        False, True (see :class:`Profile`).
+    """
 
     radius: float
     contact_modulus: float
@@ -164,6 +217,15 @@ class RoughExponential:
 
     P = P_ref exp(U/γσ); the approach is measured from the level where P = P_ref (1 N by
     default; the choice does not affect anything physical).
+
+    Attributes
+    ----------
+    gamma_sigma : float
+        γσ in m (the rms roughness σ times γ).
+    reference_load : float
+        P_ref in N.
+    plane, axisymmetric : bool
+        False, False (see :class:`Profile`).
     """
 
     gamma_sigma: float
@@ -193,6 +255,15 @@ class Tabulated:
     The slider set is exact: one slider at each tabulated approach where the slope
     increases, with stiffness equal to the increase. P(U) must be convex (non-decreasing
     slope), start at P = 0, and increase.
+
+    Attributes
+    ----------
+    U : (K,) array
+        Approaches in m, increasing.
+    P : (K,) array
+        Normal loads in N (N/m in 2-D), from 0, increasing, convex in U.
+    plane, axisymmetric : bool
+        Whether the table is per unit length; False.
     """
 
     U: np.ndarray
