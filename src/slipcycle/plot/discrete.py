@@ -252,6 +252,9 @@ def v_space(result, G: np.ndarray, h: np.ndarray, verts: np.ndarray) -> Figure:
         draw(axz, zoom[0], zoom[1], False)
         axz.set_xlabel(f"v₀ (node 0) [{unit}]")
         axz.set_ylabel(f"v₁ (node 1) [{unit}]")
+        # ticks and label on the outer side, so the zoom connectors cross no text
+        axz.yaxis.tick_right()
+        axz.yaxis.set_label_position("right")
         axz.set_title("zoom on the safe shakedown region", fontsize=10)
         ax.indicate_inset_zoom(axz, edgecolor="0.3")
     fig.tight_layout()
