@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from slipcycle._version import __version__
-from slipcycle.registry import run_model
+from slipcycle.api import run
 
 __all__ = ["DEMO_CASES", "write_report"]
 
@@ -119,7 +119,7 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None) 
         ``out/rough_w_map/``.
     cases : mapping, optional
         Case name -> (title, TOML text); default :data:`DEMO_CASES`. Each case is run by
-        its model through :func:`slipcycle.registry.run_model`.
+        its model through :func:`slipcycle.run`.
 
     Returns
     -------
@@ -140,7 +140,7 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None) 
     for i, (name, (title, text)) in enumerate(cases.items(), 1):
         t0 = time.perf_counter()
         case = parse_case_text(text.strip() + "\n")
-        outputs = run_model(case)
+        outputs = run(case).to_outputs()
         write_outputs(out / name, outputs, case.text, None)
         dt = time.perf_counter() - t0
         s = to_jsonable(outputs.summary)

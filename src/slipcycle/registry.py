@@ -6,10 +6,14 @@ below every other layer (``io`` asks it which commands serve a model, ``sweep`` 
 demo run any model through it, the command line lists the models it serves), while
 ``slipcycle --help`` stays fast.
 
-A model's ``runner`` is ``run_case(case: Case) -> RunOutputs``: it validates the whole case
-(raising :class:`~slipcycle.io.CaseError` before any computation), solves, and returns the
-summary, Dataset and figures. Its ``validator`` reads and checks the case without solving
-(used by sweeps to check every cell before the first run).
+A model's ``solver`` is ``solve_case(case: Case) -> RunResult``: it validates the whole
+case (raising :class:`~slipcycle.io.CaseError` before any computation) and solves it into
+the model's result object (:class:`slipcycle.result.RunResult`); its ``model_solver``
+solves the validated model objects named in ``model_types`` (built in Python) the same
+way. :func:`slipcycle.run` dispatches through both. The ``runner`` is ``run_case(case) ->
+RunOutputs`` (``solve_case(case).to_outputs()``), kept for callers of this release. Its
+``validator`` reads and checks the case without solving (used by sweeps to check every
+cell before the first run).
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 __all__ = ["ModelEntry", "MODELS", "MODEL_RUNNERS", "MODEL_COMMANDS", "RUN_MODELS",
-           "resolve", "runner", "validator", "run_model"]
+           "resolve", "runner", "validator", "run_model", "solver", "entry_for_object"]
 
 
 @dataclass(frozen=True)
@@ -36,21 +40,50 @@ class ModelEntry:
         ``"module:function"`` that reads and checks a case of this model without solving.
     commands : tuple of str
         The ``slipcycle`` commands that take cases of this model.
+    solver : str or None
+        ``"module:function"`` of ``solve_case(case) -> RunResult`` (validate and solve).
+    model_solver : str or None
+        ``"module:function"`` solving a validated model object (or the items of a tuple
+        of them) into the same result.
+    model_types : tuple of str
+        ``"module:Class"`` of the model objects ``model_solver`` takes (a tuple is
+        matched on the type of its first item).
+    result : str or None
+        ``"module:Class"`` of the model's result (a :class:`slipcycle.result.RunResult`).
     """
 
     runner: str | None
     validator: str | None
     commands: tuple[str, ...]
+    solver: str | None = None
+    model_solver: str | None = None
+    model_types: tuple[str, ...] = ()
+    result: str | None = None
 
 
 MODELS: dict[str, ModelEntry] = {
-    "halfspace": ModelEntry("slipcycle.halfspace.case:run_case",
-                            "slipcycle.halfspace.case:parse_case", ("run", "map", "sweep")),
-    "discrete": ModelEntry("slipcycle.discrete.case:run_case",
-                           "slipcycle.discrete.case:read_discrete_case",
-                           ("run", "shakedown", "basins", "sweep")),
-    "rods": ModelEntry("slipcycle.rods.case:run_case", "slipcycle.rods.case:parse_case",
-                       ("run", "limits", "sweep")),
+    "halfspace": ModelEntry(
+        "slipcycle.halfspace.case:run_case", "slipcycle.halfspace.case:parse_case",
+        ("run", "map", "sweep"),
+        solver="slipcycle.halfspace.case:solve_case",
+        model_solver="slipcycle.halfspace.case:solve_model",
+        model_types=("slipcycle.halfspace.model:HalfspaceModel",),
+        result="slipcycle.halfspace.outputs:HalfspaceResult"),
+    "discrete": ModelEntry(
+        "slipcycle.discrete.case:run_case", "slipcycle.discrete.case:read_discrete_case",
+        ("run", "shakedown", "basins", "sweep"),
+        solver="slipcycle.discrete.case:solve_case",
+        model_solver="slipcycle.discrete.case:solve_model",
+        model_types=("slipcycle.discrete.case:DiscreteCase",
+                     "slipcycle.discrete.model:FrictionalSystem"),
+        result="slipcycle.discrete.case:DiscreteResult"),
+    "rods": ModelEntry(
+        "slipcycle.rods.case:run_case", "slipcycle.rods.case:parse_case",
+        ("run", "limits", "sweep"),
+        solver="slipcycle.rods.case:solve_case",
+        model_solver="slipcycle.rods.case:solve_model",
+        model_types=("slipcycle.rods.case:RodsCase",),
+        result="slipcycle.rods.case:RodsResult"),
     "fe": ModelEntry(None, "slipcycle.fe.model:build_problem", ("reduce",)),
 }
 
@@ -88,3 +121,27 @@ def run_model(case):
         Summary, Dataset and figures of the run.
     """
     return runner(case.model)(case)
+
+
+def solver(model: str) -> Callable[..., Any]:
+    """``solve_case`` of ``model``: Case -> result object (KeyError if not solved)."""
+    target = MODELS[model].solver
+    if target is None:
+        raise KeyError(model)
+    return resolve(target)
+
+
+def entry_for_object(obj: object) -> tuple[str, ModelEntry] | None:
+    """The model whose ``model_types`` hold the type of ``obj`` (or of a base class).
+
+    Types are compared by ``"module:qualified name"``, so nothing is imported.
+
+    Returns
+    -------
+    (name, ModelEntry) or None
+    """
+    names = {f"{c.__module__}:{c.__qualname__}" for c in type(obj).__mro__}
+    for name, entry in MODELS.items():
+        if entry.model_solver and names.intersection(entry.model_types):
+            return name, entry
+    return None

@@ -17,12 +17,13 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
+    from slipcycle.api import run
     from slipcycle.io import read_case, write_outputs
     from slipcycle.io.results import to_jsonable
-    from slipcycle.registry import RUN_MODELS, run_model
+    from slipcycle.registry import RUN_MODELS
 
     case = read_case(args.case, models=list(RUN_MODELS))
-    outputs = run_model(case)
+    outputs = run(case).to_outputs()
     write_outputs(args.out, outputs, case.text, case.path)
     if not args.quiet:
         print(json.dumps(to_jsonable(outputs.summary), indent=2))

@@ -8,6 +8,9 @@ figures. Keys are documented in ``docs/discrete.md``.
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 import xarray as xr
@@ -24,8 +27,10 @@ from slipcycle.discrete.steady import (
 from slipcycle.discrete.wellposed import critical_friction
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.loading import HarmonicLoad, TabulatedLoad
+from slipcycle.result import STEADY_STATES, RunResult, SteadyState
 
-__all__ = ["run_case", "read_discrete_case", "DiscreteCase", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
+__all__ = ["run_case", "read_discrete_case", "DiscreteCase", "DiscreteResult", "discrete_case",
+           "solve_case", "solve_model", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
 
 
 class DiscreteCase:
@@ -351,6 +356,7 @@ SUMMARY_UNITS = {
 #: every word of the categorical summary entries (position = code in sweep stores)
 SUMMARY_FLAGS = {
     "steady_state": STEADY_CLASSES,
+    "steady_state_class": STEADY_STATES,
     "f_crit_method": ("exact", "bound"),
 }
 
@@ -362,6 +368,7 @@ def summarize(dc: DiscreteCase, res, wall: float) -> dict:
         "model": "discrete",
         "n_nodes": dc.system.n_nodes,
         "steady_state": res.steady_state,
+        "steady_state_class": SteadyState(res.steady_state).value,
         "converged": res.steady_converged,
         "residual": res.residual,
         "cycles_run": res.cycles_run,
@@ -394,22 +401,179 @@ def _v_space_geometry(dc: DiscreteCase):
     return G, h, safe_vertices(G, h)
 
 
-def run_case(case: Case) -> RunOutputs:
-    """Validate the whole case, solve to the steady state, return summary/dataset/figures."""
-    dc = read_discrete_case(case)
+#: run settings of a discrete case built in Python (the defaults of the ``[run]`` table)
+RUN_DEFAULTS = {"cycles": 40, "steps_per_cycle": 100, "tol": 1e-8, "min_cycles": 1}
+
+
+def discrete_case(system: FrictionalSystem, load, run: Mapping | None = None, *,
+                  initial_slip=None, protocol=None,
+                  f_crit_exact_max_nodes: int = 10) -> DiscreteCase:
+    """A :class:`DiscreteCase` from Python objects (what :func:`read_discrete_case` builds).
+
+    Parameters
+    ----------
+    system : FrictionalSystem
+        A, B, C (N/m) and the friction coefficients of the N nodes.
+    load : DiscreteLoad or callable
+        ``load(theta) -> (n, 2N)`` array of [q^w, p^w] (N) with ``cycle_samples``.
+    run : mapping, optional
+        ``cycles``, ``steps_per_cycle``, ``tol`` (or ``tolerance``), ``min_cycles``;
+        :data:`RUN_DEFAULTS` for those not given.
+    initial_slip : (N,) array, optional
+        Slip state at θ = 0 (m); else the load is applied from the unloaded state.
+    protocol : (M, 2N) array, optional
+        Assembly states [q^w, p^w] (N) before the first cycle.
+    f_crit_exact_max_nodes : int, optional
+        Largest system for which the critical friction is computed exactly.
+
+    Returns
+    -------
+    DiscreteCase
+    """
+    settings = dict(RUN_DEFAULTS)
+    for key, value in dict(run or {}).items():
+        key = "tol" if key == "tolerance" else key
+        if key not in RUN_DEFAULTS:
+            raise TypeError(f"unknown run setting {key!r} (known: {', '.join(RUN_DEFAULTS)})")
+        settings[key] = value
+    fc = critical_friction(system.A, system.B, system.friction,
+                           exact_max_nodes=f_crit_exact_max_nodes)
+    return DiscreteCase(system, load, fc, settings,
+                        None if initial_slip is None else np.asarray(initial_slip, float),
+                        None if protocol is None else np.asarray(protocol, float))
+
+
+_DETAIL_MESSAGES = {
+    "shakedown": "shakedown: no node slips in the steady cycle",
+    "cyclic_slip": "cyclic slip: some nodes slip every cycle, the others stay stuck",
+    "ratcheting": "ratcheting: slip accumulates by the same amount every cycle",
+    "not_converged": "no steady cycle within the cycles allowed",
+}
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class DiscreteResult(RunResult):
+    """Result of a discrete run: the shared vocabulary of :class:`~slipcycle.result.RunResult`
+    over the validated case and the steady-state simulation.
+
+    ``steady_state`` is the word of :func:`~slipcycle.discrete.steady.simulate` (already
+    one of :class:`~slipcycle.result.SteadyState`); ``steady_state_detail`` repeats it.
+
+    Attributes
+    ----------
+    case : DiscreteCase
+        The validated system, load and run settings.
+    solution : SteadyResult
+        Histories of every cycle run and the classification of the last one.
+    wall_time : float
+        Seconds the simulation took (``wall_time_s`` of the summary).
+    """
+
+    model: ClassVar[str] = "discrete"
+
+    case: DiscreteCase
+    solution: object
+    wall_time: float
+
+    @classmethod
+    def from_solution(cls, dc: DiscreteCase, res, wall: float) -> DiscreteResult:
+        """Wrap the output of :func:`~slipcycle.discrete.steady.simulate`.
+
+        Parameters
+        ----------
+        dc : DiscreteCase
+        res : SteadyResult
+        wall : float
+            Seconds the simulation took.
+
+        Returns
+        -------
+        DiscreteResult
+        """
+        msg = (f"{_DETAIL_MESSAGES[res.steady_state]} ({res.cycles_run} cycles, residual "
+               f"{res.residual:.3g})")
+        return cls(steady_state=SteadyState(res.steady_state),
+                   steady_state_detail=res.steady_state,
+                   dissipation_per_cycle=res.dissipation_per_cycle,
+                   cycles_run=int(res.cycles_run), residual=float(res.residual),
+                   converged=bool(res.steady_converged), message=msg,
+                   case=dc, solution=res, wall_time=wall)
+
+    @property
+    def flags(self) -> dict[str, tuple[str, ...]]:
+        """Every word of the categorical summary entries (:data:`SUMMARY_FLAGS`)."""
+        return dict(SUMMARY_FLAGS)
+
+    def summary(self) -> dict:
+        """The summary dictionary (keys documented in docs/discrete.md), with ``units``."""
+        return summarize(self.case, self.solution, self.wall_time)
+
+    def to_dataset(self) -> xr.Dataset:
+        """States, reactions and node states of every cycle run; loads, dissipation and
+        slip lengths (units on every variable)."""
+        return _dataset(self.case, self.solution)
+
+    def figures(self, dataset: xr.Dataset | None = None) -> dict:
+        """``slip_and_tractions``, ``hysteresis`` and, for two nodes, ``v_space``."""
+        from slipcycle.plot import discrete as plots  # matplotlib only when figures are made
+
+        ds = self.to_dataset() if dataset is None else dataset
+        dc, res = self.case, self.solution
+        figures = {
+            "slip_and_tractions": lambda: plots.slip_and_tractions(ds),
+            "hysteresis": lambda: plots.hysteresis(ds),
+        }
+        if dc.system.n_nodes == 2:
+            figures["v_space"] = lambda: plots.v_space(res, *_v_space_geometry(dc))
+        return figures
+
+
+def solve_model(dc, load=None, run: Mapping | None = None, **kwargs) -> DiscreteResult:
+    """Solve a discrete system to its steady state.
+
+    Parameters
+    ----------
+    dc : DiscreteCase or FrictionalSystem
+        A validated case, or a system (then ``load`` is required).
+    load : DiscreteLoad, optional
+        The periodic loads of ``dc`` when it is a system.
+    run : mapping, optional
+        Run settings for a system (see :func:`discrete_case`).
+    **kwargs
+        ``initial_slip``, ``protocol``, ``f_crit_exact_max_nodes`` of :func:`discrete_case`.
+
+    Returns
+    -------
+    DiscreteResult
+    """
+    if isinstance(dc, FrictionalSystem):
+        if load is None:
+            raise TypeError("a FrictionalSystem needs its load: (system, load[, run])")
+        dc = discrete_case(dc, load, run, **kwargs)
+    elif not isinstance(dc, DiscreteCase) or load is not None or run or kwargs:
+        raise TypeError("expected a DiscreteCase, or a FrictionalSystem with its load")
     t0 = time.perf_counter()
     res = simulate(dc.system, dc.load, initial_slip=dc.initial_slip, protocol=dc.protocol,
                    **dc.run)
-    wall = time.perf_counter() - t0
-    summary = summarize(dc, res, wall)
-    ds = _dataset(dc, res)
-    from slipcycle.plot import discrete as plots  # matplotlib only when figures are made
+    return DiscreteResult.from_solution(dc, res, time.perf_counter() - t0)
 
-    figures = {
-        "slip_and_tractions": lambda: plots.slip_and_tractions(ds),
-        "hysteresis": lambda: plots.hysteresis(ds),
-    }
-    if dc.system.n_nodes == 2:
-        figures["v_space"] = lambda: plots.v_space(res, *_v_space_geometry(dc))
-    return RunOutputs(summary=summary, dataset=ds, figures=figures,
-                      flags=dict(SUMMARY_FLAGS))
+
+def solve_case(case: Case) -> DiscreteResult:
+    """Validate a discrete case completely (CaseError before any computation), then solve.
+
+    Parameters
+    ----------
+    case : Case
+        A ``model = "discrete"`` case.
+
+    Returns
+    -------
+    DiscreteResult
+    """
+    return solve_model(read_discrete_case(case))
+
+
+def run_case(case: Case) -> RunOutputs:
+    """Validate the whole case, solve to the steady state, return summary/dataset/figures
+    (``solve_case(case).to_outputs()``)."""
+    return solve_case(case).to_outputs()

@@ -39,7 +39,7 @@ from slipcycle.halfspace.profiles import (
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.loading import TabulatedLoad
 
-__all__ = ["parse_case", "run_case"]
+__all__ = ["parse_case", "run_case", "solve_case", "solve_model"]
 
 PROFILES = ("sphere", "cylinder", "flat_punch", "power_law", "rough_exponential", "tabulated")
 
@@ -280,10 +280,47 @@ def _check_physics(case: Case, model: HalfspaceModel) -> None:
                         f"the loads reach {hi:g} N")
 
 
-def run_case(case: Case) -> RunOutputs:
-    """Validate, solve and package a half-space case."""
-    from slipcycle.halfspace.outputs import package
+def solve_model(model: HalfspaceModel):
+    """Solve a validated half-space model into its result object.
 
-    model = parse_case(case)
-    bed, result = solve(model)
-    return package(model, bed, result)
+    Parameters
+    ----------
+    model : HalfspaceModel
+        A model built in Python or by :func:`parse_case`.
+
+    Returns
+    -------
+    HalfspaceResult
+        The shared result vocabulary (:class:`~slipcycle.result.RunResult`) over the bed
+        and history of :func:`~slipcycle.halfspace.model.solve`.
+    """
+    from slipcycle.halfspace.outputs import HalfspaceResult
+
+    if not isinstance(model, HalfspaceModel):
+        raise TypeError(f"expected a HalfspaceModel, got {type(model).__name__}")
+    return HalfspaceResult.from_solution(model, *solve(model))
+
+
+def solve_case(case: Case):
+    """Validate a half-space case completely, then solve it.
+
+    Parameters
+    ----------
+    case : Case
+        A ``model = "halfspace"`` case.
+
+    Returns
+    -------
+    HalfspaceResult
+
+    Raises
+    ------
+    CaseError
+        Naming the offending key, before any computation.
+    """
+    return solve_model(parse_case(case))
+
+
+def run_case(case: Case) -> RunOutputs:
+    """Validate, solve and package a half-space case (``solve_case(case).to_outputs()``)."""
+    return solve_case(case).to_outputs()

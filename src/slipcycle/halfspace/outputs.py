@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import ClassVar
+
 import numpy as np
 import xarray as xr
 
@@ -10,8 +13,10 @@ from slipcycle.halfspace.history import HistoryResult
 from slipcycle.halfspace.model import HalfspaceModel
 from slipcycle.halfspace.profiles import RoughExponential
 from slipcycle.io import RunOutputs
+from slipcycle.result import STEADY_STATES, RunResult, classify
 
-__all__ = ["FLAGS", "package", "permanent_stick", "stick_history", "w_hat"]
+__all__ = ["FLAGS", "HalfspaceResult", "package", "permanent_stick", "slips", "stick_history",
+           "w_hat"]
 
 
 def w_hat(W: float, model: HalfspaceModel, P0: float) -> float:
@@ -97,91 +102,209 @@ def permanent_stick(bed: SliderBed, result: HistoryResult
     return P_D, size
 
 
+def slips(bed: SliderBed, result: HistoryResult) -> bool:
+    """Whether any slider slips over the last cycle run.
+
+    Uses the test of :func:`permanent_stick`: total slip Σ|Δz| above
+    ``PERMANENT_STICK_TOL`` of the largest elastic tangential travel λ f (U_max − s_min).
+    """
+    if result.cycles_run == 0:
+        return False
+    last = result.cycle == result.cycle.max()
+    U_max = float(result.U[last].max())
+    scale = bed.compliance_ratio * bed.friction * max(U_max - float(bed.level[0]), 0.0)
+    return bool(np.any(result.slider_slip[-1] > PERMANENT_STICK_TOL * scale))
+
+
+def _message(result: HistoryResult) -> str:
+    if result.gross_slip is not None:
+        g = result.gross_slip
+        when = "during the assembly" if g.cycle < 0 else f"in cycle {g.cycle}"
+        return (f"gross slip {when} at theta = {g.theta:.6g} rad (P = {g.P:.6g}, "
+                f"Q = {g.Q:.6g}): the contact cannot carry the tangential load")
+    if result.steady:
+        return f"steady cycle reached after {result.cycles_run} cycles"
+    return (f"no steady cycle within {result.cycles_run} cycles (state change "
+            f"{result.state_change:.3g})")
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class HalfspaceResult(RunResult):
+    """Result of a half-space run: the shared vocabulary of :class:`~slipcycle.result.RunResult`
+    over the model, its slider bed and its history.
+
+    ``steady_state`` is ``shakedown`` (steady, no slider slips), ``cyclic_slip`` (steady,
+    some slider slips every cycle), ``gross_slip`` or ``not_converged``;
+    ``steady_state_detail`` is the word of the summary's ``steady_state`` (``steady``,
+    ``gross_slip``, ``not_converged``).
+
+    Attributes
+    ----------
+    model_input : HalfspaceModel
+        The validated model that was solved.
+    bed : SliderBed
+        The sliders (levels, stiffnesses, capacities) the history ran on.
+    history : HistoryResult
+        Load path and dissipation per cycle (N, m, J; per metre for plane contacts).
+    """
+
+    model: ClassVar[str] = "halfspace"
+
+    model_input: HalfspaceModel
+    bed: SliderBed
+    history: HistoryResult
+
+    @classmethod
+    def from_solution(cls, model: HalfspaceModel, bed: SliderBed, result: HistoryResult
+                      ) -> HalfspaceResult:
+        """Wrap the output of :func:`~slipcycle.halfspace.model.solve`.
+
+        Parameters
+        ----------
+        model : HalfspaceModel
+        bed : SliderBed
+        result : HistoryResult
+
+        Returns
+        -------
+        HalfspaceResult
+        """
+        gross = result.gross_slip is not None
+        return cls(
+            steady_state=classify(converged=bool(result.steady), gross_slip=gross,
+                                  slips=slips(bed, result)),
+            steady_state_detail=_steady_label(result),
+            dissipation_per_cycle=None if gross else result.dissipation_per_cycle,
+            cycles_run=int(result.cycles_run), residual=float(result.state_change),
+            converged=bool(result.steady) and not gross, message=_message(result),
+            dissipation_unit="J/m" if model.profile.plane else "J",
+            model_input=model, bed=bed, history=result)
+
+    @property
+    def flags(self) -> dict[str, tuple[str, ...]]:
+        """Every word of the categorical summary entries."""
+        return {**FLAGS, "steady_state_class": STEADY_STATES}
+
+    def summary(self) -> dict:
+        """The ``summary.json`` dictionary (keys in docs/halfspace.md), with ``units``."""
+        model, bed, result = self.model_input, self.bed, self.history
+        W = result.dissipation_per_cycle
+        W_s = result.slider_sum_dissipation
+        per_len = "/m" if model.profile.plane else ""
+        load_unit, energy_unit = "N" + per_len, "J" + per_len
+        units = {"dissipation_per_cycle": energy_unit,
+                 "dissipation_per_cycle_sliders": energy_unit,
+                 "dissipation_relative_difference": "1", "cycles_run": "1",
+                 "state_change": "1", "sliders": "1", "friction": "1", "compliance_ratio": "1"}
+        summary: dict = {
+            "model": "halfspace",
+            "profile": model.profile_name or _profile_name(model.profile),
+            "steady_state": _steady_label(result),
+            "steady_state_class": self.steady_state.value,
+            "dissipation_per_cycle": W if result.gross_slip is None else None,
+            "dissipation_per_cycle_sliders": W_s if result.gross_slip is None else None,
+            "dissipation_relative_difference": (abs(W - W_s) / max(abs(W), 1e-300)
+                                                if result.cycles_run and W != 0 else 0.0)
+                                                if result.gross_slip is None else None,
+            "cycles_run": result.cycles_run,
+            "state_change": result.state_change,
+            "sliders": bed.size,
+            "friction": model.friction,
+            "compliance_ratio": model.compliance_ratio,
+            "normal_control": model.normal_control,
+            "tangential_control": model.tangential_control,
+            "gross_slip": None,
+            "units": units,
+        }
+        if model.elasticity is not None:
+            summary["contact_modulus"] = model.elasticity.contact_modulus
+            summary["dundurs_beta"] = model.elasticity.dundurs_beta
+            units.update(contact_modulus="Pa", dundurs_beta="1")
+            if abs(model.elasticity.dundurs_beta) > 0.05:
+                summary["warnings"] = [f"Dundurs beta = {model.elasticity.dundurs_beta:.3f}: "
+                                       "the materials are dissimilar, so the uncoupled theory "
+                                       "is approximate"]
+        if result.gross_slip is not None:
+            g = result.gross_slip
+            # when: step and cycle (-1: during the assembly path) and angle; where: P and Q
+            summary["gross_slip"] = {"step": g.step, "cycle": g.cycle, "theta": g.theta,
+                                     "P": g.P, "Q": g.Q}
+            units.update({"gross_slip.step": "1", "gross_slip.cycle": "1",
+                          "gross_slip.theta": "rad", "gross_slip.P": load_unit,
+                          "gross_slip.Q": load_unit})
+        stick = permanent_stick(bed, result) if result.gross_slip is None else None
+        if stick is not None:
+            summary["permanent_stick_load"] = stick[0]
+            units["permanent_stick_load"] = load_unit
+            if stick[1] is not None:
+                last = result.cycle == result.cycle.max()
+                summary["permanent_stick_size"] = stick[1]
+                summary["contact_size_max"] = float(np.interp(result.P[last].max(),
+                                                              bed.edge_load, bed.edge_size))
+                units.update(permanent_stick_size="m", contact_size_max="m")
+        if isinstance(model.profile, RoughExponential) and result.gross_slip is None:
+            P0 = float(model.normal.mean[0]) if hasattr(model.normal, "mean") else None
+            if P0 and model.normal_control == "force":
+                summary["W_hat"] = w_hat(W, model, P0)
+                units["W_hat"] = "1"
+        return summary
+
+    def to_dataset(self) -> xr.Dataset:
+        """Histories per step, slider data per cycle and, for axisymmetric profiles, the
+        tractions of the last cycle (units on every variable)."""
+        model, bed, result = self.model_input, self.bed, self.history
+        P_S, stick_size = stick_history(bed, result)
+        load_unit = "N/m" if model.profile.plane else "N"
+        stick = permanent_stick(bed, result) if result.gross_slip is None else None
+        ds = _dataset(model, bed, result, P_S, stick_size)
+        if stick is not None:
+            ds["permanent_stick_load"] = ((), stick[0], {
+                "units": load_unit, "long_name": "load P_D whose contact area never slips"})
+            if stick[1] is not None:
+                ds["permanent_stick_size"] = ((), stick[1], {
+                    "units": "m",
+                    "long_name": "radius/half-width of the permanent stick zone"})
+        if result.gross_slip is not None:
+            g = result.gross_slip
+            ds["gross_slip_P"] = ((), g.P, {"units": load_unit,
+                                            "long_name": "normal load at gross slip"})
+            ds["gross_slip_Q"] = ((), g.Q, {"units": load_unit,
+                                            "long_name": "tangential load at gross slip"})
+        return ds
+
+    def figures(self, dataset: xr.Dataset | None = None) -> dict:
+        """Figure name -> function drawing it (``hysteresis``, ``load_path``, and where
+        the data exist ``tractions``, ``dissipation_density``, ``stick_zone``)."""
+        from slipcycle.plot import halfspace as hplot
+
+        ds = self.to_dataset() if dataset is None else dataset
+        model = self.model_input
+        figures = {"hysteresis": lambda: hplot.hysteresis(ds),
+                   "load_path": lambda: hplot.load_path(ds, model.friction)}
+        if "shear_traction" in ds:
+            figures["tractions"] = lambda: hplot.tractions(ds)
+            figures["dissipation_density"] = lambda: hplot.dissipation_density(ds)
+        if "stick_size" in ds and self.history.cycles_run:
+            figures["stick_zone"] = lambda: hplot.stick_zone(ds)
+        return figures
+
+
 def package(model: HalfspaceModel, bed: SliderBed, result: HistoryResult) -> RunOutputs:
-    """Turn a solved history into summary.json numbers, a Dataset and figures."""
-    from slipcycle.plot import halfspace as hplot
+    """Turn a solved history into summary.json numbers, a Dataset and figures.
 
-    P_S, stick_size = stick_history(bed, result)
-    W = result.dissipation_per_cycle
-    W_s = result.slider_sum_dissipation
-    per_len = "/m" if model.profile.plane else ""
-    load_unit, energy_unit = "N" + per_len, "J" + per_len
-    units = {"dissipation_per_cycle": energy_unit, "dissipation_per_cycle_sliders": energy_unit,
-             "dissipation_relative_difference": "1", "cycles_run": "1", "state_change": "1",
-             "sliders": "1", "friction": "1", "compliance_ratio": "1"}
-    summary: dict = {
-        "model": "halfspace",
-        "profile": model.profile_name or _profile_name(model.profile),
-        "steady_state": _steady_label(result),
-        "dissipation_per_cycle": W if result.gross_slip is None else None,
-        "dissipation_per_cycle_sliders": W_s if result.gross_slip is None else None,
-        "dissipation_relative_difference": (abs(W - W_s) / max(abs(W), 1e-300)
-                                            if result.cycles_run and W != 0 else 0.0)
-                                            if result.gross_slip is None else None,
-        "cycles_run": result.cycles_run,
-        "state_change": result.state_change,
-        "sliders": bed.size,
-        "friction": model.friction,
-        "compliance_ratio": model.compliance_ratio,
-        "normal_control": model.normal_control,
-        "tangential_control": model.tangential_control,
-        "gross_slip": None,
-        "units": units,
-    }
-    if model.elasticity is not None:
-        summary["contact_modulus"] = model.elasticity.contact_modulus
-        summary["dundurs_beta"] = model.elasticity.dundurs_beta
-        units.update(contact_modulus="Pa", dundurs_beta="1")
-        if abs(model.elasticity.dundurs_beta) > 0.05:
-            summary["warnings"] = [f"Dundurs beta = {model.elasticity.dundurs_beta:.3f}: the "
-                                   "materials are dissimilar, so the uncoupled theory is "
-                                   "approximate"]
-    if result.gross_slip is not None:
-        g = result.gross_slip
-        # when: step and cycle (-1: during the assembly path) and angle; where: P and Q
-        summary["gross_slip"] = {"step": g.step, "cycle": g.cycle, "theta": g.theta,
-                                 "P": g.P, "Q": g.Q}
-        units.update({"gross_slip.step": "1", "gross_slip.cycle": "1",
-                      "gross_slip.theta": "rad", "gross_slip.P": load_unit,
-                      "gross_slip.Q": load_unit})
-    stick = permanent_stick(bed, result) if result.gross_slip is None else None
-    if stick is not None:
-        summary["permanent_stick_load"] = stick[0]
-        units["permanent_stick_load"] = load_unit
-        if stick[1] is not None:
-            last = result.cycle == result.cycle.max()
-            summary["permanent_stick_size"] = stick[1]
-            summary["contact_size_max"] = float(np.interp(result.P[last].max(), bed.edge_load,
-                                                          bed.edge_size))
-            units.update(permanent_stick_size="m", contact_size_max="m")
-    if isinstance(model.profile, RoughExponential) and result.gross_slip is None:
-        P0 = float(model.normal.mean[0]) if hasattr(model.normal, "mean") else None
-        if P0 and model.normal_control == "force":
-            summary["W_hat"] = w_hat(W, model, P0)
-            units["W_hat"] = "1"
+    Parameters
+    ----------
+    model : HalfspaceModel
+    bed : SliderBed
+    result : HistoryResult
+        The output of :func:`~slipcycle.halfspace.model.solve`.
 
-    ds = _dataset(model, bed, result, P_S, stick_size)
-    if stick is not None:
-        ds["permanent_stick_load"] = ((), stick[0], {
-            "units": load_unit, "long_name": "load P_D whose contact area never slips"})
-        if stick[1] is not None:
-            ds["permanent_stick_size"] = ((), stick[1], {
-                "units": "m", "long_name": "radius/half-width of the permanent stick zone"})
-    if result.gross_slip is not None:
-        g = result.gross_slip
-        ds["gross_slip_P"] = ((), g.P, {"units": load_unit,
-                                        "long_name": "normal load at gross slip"})
-        ds["gross_slip_Q"] = ((), g.Q, {"units": load_unit,
-                                        "long_name": "tangential load at gross slip"})
-    figures = {"hysteresis": lambda: hplot.hysteresis(ds),
-               "load_path": lambda: hplot.load_path(ds, model.friction)}
-    if "shear_traction" in ds:
-        figures["tractions"] = lambda: hplot.tractions(ds)
-        figures["dissipation_density"] = lambda: hplot.dissipation_density(ds)
-    if stick_size is not None and result.cycles_run:
-        figures["stick_zone"] = lambda: hplot.stick_zone(ds)
-    flags = {k: v for k, v in FLAGS.items() if k in summary}
-    return RunOutputs(summary=summary, dataset=ds, figures=figures, flags=flags)
+    Returns
+    -------
+    RunOutputs
+        ``HalfspaceResult.from_solution(model, bed, result).to_outputs()``.
+    """
+    return HalfspaceResult.from_solution(model, bed, result).to_outputs()
 
 
 def _dataset(model, bed, result, P_S, stick_size) -> xr.Dataset:

@@ -17,15 +17,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from slipcycle.io import Case, RunOutputs, Section
 from slipcycle.io.sizes import MEMORY_LIMIT, check_memory, memory_limit
+from slipcycle.result import STEADY_STATES, RunResult, classify
 from slipcycle.rods.model import INTERFACES, Excitation, Rod, TwoRods
 
-__all__ = ["RodsCase", "parse_case", "run_case", "analyse", "interface_bed", "RUN_UNITS",
-           "RUN_FLAGS", "MEMORY_LIMIT"]
+__all__ = ["RodsCase", "RodsResult", "parse_case", "run_case", "solve_case", "solve_model",
+           "analyse", "interface_bed", "RUN_UNITS", "RUN_FLAGS", "MEMORY_LIMIT"]
 
 
 
@@ -240,86 +242,193 @@ RUN_UNITS = {
 }
 
 #: every word of the categorical entries of the `slipcycle run` summary
-RUN_FLAGS = {"model": ("rods",), "interface": INTERFACES}
+RUN_FLAGS = {"model": ("rods",), "interface": INTERFACES,
+             "steady_state_class": STEADY_STATES}
 
 
 def _none_if_inf(x: float):
     return None if not math.isfinite(x) else float(x)
 
 
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class RodsResult(RunResult):
+    """Result of a two-rod run: the shared vocabulary of :class:`~slipcycle.result.RunResult`
+    over the validated case and the analyses of :func:`analyse`.
+
+    ``steady_state``: ``shakedown`` (periodic state reached, the interface does not slip:
+    detail ``stuck``), ``cyclic_slip`` (periodic state with slip every cycle: detail
+    ``slipping``) or ``not_converged``. ``dissipation_per_cycle`` [J], ``cycles_run`` and
+    ``residual`` are those of the dynamic steady state.
+
+    Attributes
+    ----------
+    case : RodsCase
+        The validated rods, excitation and run settings.
+    analysis : dict
+        The output of :func:`analyse` (``dyn``, ``qs``, ``bed``, ``iwan``,
+        ``inception_dyn``, ``inception_qs``, ``natural``, ``reg``).
+    """
+
+    model: ClassVar[str] = "rods"
+
+    case: RodsCase
+    analysis: dict
+
+    @classmethod
+    def from_analysis(cls, rc: RodsCase, res: dict) -> RodsResult:
+        """Wrap the output of :func:`analyse`.
+
+        Parameters
+        ----------
+        rc : RodsCase
+        res : dict
+
+        Returns
+        -------
+        RodsResult
+        """
+        dyn = res["dyn"]
+        state = classify(converged=bool(dyn.converged), slips=bool(dyn.slipped))
+        detail = ("not_converged" if not dyn.converged
+                  else "slipping" if dyn.slipped else "stuck")
+        if dyn.converged:
+            msg = (f"periodic steady state after {dyn.cycles} cycles; the interface "
+                   + ("slips" if dyn.slipped else "sticks"))
+        else:
+            msg = (f"no periodic steady state within {dyn.cycles} cycles (residual "
+                   f"{dyn.residual:.3g})")
+        return cls(steady_state=state, steady_state_detail=detail,
+                   dissipation_per_cycle=float(dyn.dissipation), cycles_run=int(dyn.cycles),
+                   residual=float(dyn.residual), converged=bool(dyn.converged), message=msg,
+                   case=rc, analysis=res)
+
+    @property
+    def flags(self) -> dict[str, tuple[str, ...]]:
+        """Every word of the categorical summary entries (:data:`RUN_FLAGS`)."""
+        return dict(RUN_FLAGS)
+
+    def summary(self) -> dict:
+        """The ``slipcycle run`` summary (keys in docs/rods.md), with ``units``."""
+        rc, res = self.case, self.analysis
+        rods, exc, dyn, qs = rc.rods, rc.exc, res["dyn"], res["qs"]
+        N0 = exc.axial_force
+        sep = bool(np.min(dyn.N) < 0.0)
+        summary = {
+            "model": "rods",
+            "interface": rods.interface,
+            "omega1": rc.omega1,
+            "omega1_hz": rc.omega1 / (2 * math.pi),
+            "natural_frequencies": res["natural"],
+            "frequency": exc.frequency,
+            "frequency_ratio": rc.frequency_ratio,
+            "rotation_amplitude": exc.rotation_amplitude,
+            "T_dyn_max": dyn.T_max,
+            "T_qs_max": qs.T_max,
+            "torque_ratio": dyn.T_max / qs.T_max,
+            "dissipation_per_cycle": dyn.dissipation,
+            "dissipation_per_cycle_qs": qs.dissipation,
+            "dissipation_ratio": (dyn.dissipation / qs.dissipation if qs.dissipation > 0 else None),
+            "damping_loss_per_cycle": dyn.damping_loss,
+            "input_work_per_cycle": dyn.input_work,
+            "energy_balance_error": ((dyn.input_work - dyn.dissipation - dyn.damping_loss)
+                                     / max(abs(dyn.input_work), 1e-300)),
+            "slip_inception_amplitude_dyn": _none_if_inf(res["inception_dyn"]),
+            "slip_inception_amplitude_qs": _none_if_inf(res["inception_qs"]),
+            "slip_inception_torque": _none_if_inf(res["bed"].first_slip_torque(N0)),
+            "gross_slip_torque": _none_if_inf(res["bed"].capacity(N0)),
+            "slipped": dyn.slipped,
+            "separation": sep,
+            "min_normal_force": float(np.min(dyn.N)),
+            "steady_state_reached": dyn.converged,
+            "steady_state_class": self.steady_state.value,
+            "cycles_run": dyn.cycles,
+            "steady_residual": dyn.residual,
+            "modes_per_rod": rc.modes,
+            "rings": rc.rings if rods.interface == "distributed" else None,
+        }
+        if res["iwan"] is not None:
+            iw = res["iwan"]
+            summary["iwan"] = {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi, "beta": iw.beta,
+                               "elements": res["bed"].size}
+        reg = res["reg"]
+        if reg is not None:
+            summary["regularisation"] = {
+                m: {"slope_microslip": reg[m]["slope_microslip"],
+                    "slope_macroslip": reg[m]["slope_macroslip"]}
+                for m in ("distributed", "jenkins", "coulomb", "iwan")}
+            summary["regularisation"]["iwan_fit"] = reg["iwan_params"]
+        summary["units"] = {k: v for k, v in RUN_UNITS.items()
+                            if k.split(".")[0] in summary}
+        return summary
+
+    def to_dataset(self):
+        """Dynamic and quasi-static loops over the last cycle (dimension ``time``) and,
+        with the regularisation study, its amplitude sweep (units on every variable)."""
+        import xarray as xr
+
+        dyn, qs, reg = self.analysis["dyn"], self.analysis["qs"], self.analysis["reg"]
+        tatt = {"units": "s"}
+        ds = xr.Dataset(
+            {"theta": ("time", dyn.theta, {"units": "rad", "long_name": "drive rotation"}),
+             "T_dyn": ("time", dyn.T, {"units": "N m", "long_name": "interface torque, dynamic"}),
+             "delta_dyn": ("time", dyn.delta, {"units": "rad",
+                                                "long_name": "interface relative rotation"}),
+             "N": ("time", dyn.N, {"units": "N", "long_name": "normal force (closed contact)"}),
+             "T_qs": ("time", qs.T, {"units": "N m",
+                                     "long_name": "interface torque, quasi-static"}),
+             "delta_qs": ("time", qs.delta, {"units": "rad"})},
+            coords={"time": ("time", dyn.t, tatt)})
+        if reg is not None:
+            ds = ds.assign_coords(amplitude=("amplitude", reg["amplitude"], {"units": "rad"}))
+            for m in ("distributed", "jenkins", "coulomb", "iwan"):
+                ds[f"reg_T_{m}"] = ("amplitude", reg[m]["T_amp"], {"units": "N m"})
+                ds[f"reg_D_{m}"] = ("amplitude", reg[m]["dissipation"], {"units": "J"})
+        return ds
+
+    def figures(self, dataset=None) -> dict:
+        """``hysteresis``, ``time_history`` and, with the study, ``regularisation``."""
+        from slipcycle.plot import rods as plots
+
+        ds = self.to_dataset() if dataset is None else dataset
+        reg = self.analysis["reg"]
+        figures = {"hysteresis": lambda: plots.hysteresis(ds),
+                   "time_history": lambda: plots.time_history(ds)}
+        if reg is not None:
+            figures["regularisation"] = lambda: plots.regularisation(reg)
+        return figures
+
+
+def solve_model(rc: RodsCase) -> RodsResult:
+    """Run the analyses of a validated rods case (:func:`analyse`).
+
+    Parameters
+    ----------
+    rc : RodsCase
+
+    Returns
+    -------
+    RodsResult
+    """
+    if not isinstance(rc, RodsCase):
+        raise TypeError(f"expected a RodsCase, got {type(rc).__name__}")
+    return RodsResult.from_analysis(rc, analyse(rc))
+
+
+def solve_case(case: Case) -> RodsResult:
+    """Validate a rods case completely (CaseError naming the key), then solve it.
+
+    Parameters
+    ----------
+    case : Case
+        A ``model = "rods"`` case.
+
+    Returns
+    -------
+    RodsResult
+    """
+    return solve_model(parse_case(case))
+
+
 def run_case(case: Case) -> RunOutputs:
-    """Validate, solve and package a rods case."""
-    import xarray as xr
-
-    from slipcycle.plot import rods as plots
-
-    rc = parse_case(case)
-    res = analyse(rc)
-    rods, exc, dyn, qs = rc.rods, rc.exc, res["dyn"], res["qs"]
-    N0 = exc.axial_force
-    sep = bool(np.min(dyn.N) < 0.0)
-    summary = {
-        "model": "rods",
-        "interface": rods.interface,
-        "omega1": rc.omega1,
-        "omega1_hz": rc.omega1 / (2 * math.pi),
-        "natural_frequencies": res["natural"],
-        "frequency": exc.frequency,
-        "frequency_ratio": rc.frequency_ratio,
-        "rotation_amplitude": exc.rotation_amplitude,
-        "T_dyn_max": dyn.T_max,
-        "T_qs_max": qs.T_max,
-        "torque_ratio": dyn.T_max / qs.T_max,
-        "dissipation_per_cycle": dyn.dissipation,
-        "dissipation_per_cycle_qs": qs.dissipation,
-        "dissipation_ratio": (dyn.dissipation / qs.dissipation if qs.dissipation > 0 else None),
-        "damping_loss_per_cycle": dyn.damping_loss,
-        "input_work_per_cycle": dyn.input_work,
-        "energy_balance_error": ((dyn.input_work - dyn.dissipation - dyn.damping_loss)
-                                 / max(abs(dyn.input_work), 1e-300)),
-        "slip_inception_amplitude_dyn": _none_if_inf(res["inception_dyn"]),
-        "slip_inception_amplitude_qs": _none_if_inf(res["inception_qs"]),
-        "slip_inception_torque": _none_if_inf(res["bed"].first_slip_torque(N0)),
-        "gross_slip_torque": _none_if_inf(res["bed"].capacity(N0)),
-        "slipped": dyn.slipped,
-        "separation": sep,
-        "min_normal_force": float(np.min(dyn.N)),
-        "steady_state_reached": dyn.converged,
-        "cycles_run": dyn.cycles,
-        "steady_residual": dyn.residual,
-        "modes_per_rod": rc.modes,
-        "rings": rc.rings if rods.interface == "distributed" else None,
-    }
-    if res["iwan"] is not None:
-        iw = res["iwan"]
-        summary["iwan"] = {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi, "beta": iw.beta,
-                           "elements": res["bed"].size}
-    reg = res["reg"]
-    if reg is not None:
-        summary["regularisation"] = {
-            m: {"slope_microslip": reg[m]["slope_microslip"],
-                "slope_macroslip": reg[m]["slope_macroslip"]}
-            for m in ("distributed", "jenkins", "coulomb", "iwan")}
-        summary["regularisation"]["iwan_fit"] = reg["iwan_params"]
-    summary["units"] = {k: v for k, v in RUN_UNITS.items()
-                        if k.split(".")[0] in summary}
-    tatt = {"units": "s"}
-    ds = xr.Dataset(
-        {"theta": ("time", dyn.theta, {"units": "rad", "long_name": "drive rotation"}),
-         "T_dyn": ("time", dyn.T, {"units": "N m", "long_name": "interface torque, dynamic"}),
-         "delta_dyn": ("time", dyn.delta, {"units": "rad",
-                                            "long_name": "interface relative rotation"}),
-         "N": ("time", dyn.N, {"units": "N", "long_name": "normal force (closed contact)"}),
-         "T_qs": ("time", qs.T, {"units": "N m", "long_name": "interface torque, quasi-static"}),
-         "delta_qs": ("time", qs.delta, {"units": "rad"})},
-        coords={"time": ("time", dyn.t, tatt)})
-    if reg is not None:
-        ds = ds.assign_coords(amplitude=("amplitude", reg["amplitude"], {"units": "rad"}))
-        for m in ("distributed", "jenkins", "coulomb", "iwan"):
-            ds[f"reg_T_{m}"] = ("amplitude", reg[m]["T_amp"], {"units": "N m"})
-            ds[f"reg_D_{m}"] = ("amplitude", reg[m]["dissipation"], {"units": "J"})
-    figures = {"hysteresis": lambda: plots.hysteresis(ds),
-               "time_history": lambda: plots.time_history(ds)}
-    if reg is not None:
-        figures["regularisation"] = lambda: plots.regularisation(reg)
-    return RunOutputs(summary=summary, dataset=ds, figures=figures, flags=dict(RUN_FLAGS))
+    """Validate, solve and package a rods case (``solve_case(case).to_outputs()``)."""
+    return solve_case(case).to_outputs()

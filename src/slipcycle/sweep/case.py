@@ -2,7 +2,7 @@
 
 Each ``--set`` names a dotted key of the case (``loading.lam``, ``discrete.friction``,
 ``loading.p1[1]`` for one entry of a list) and its values; the sweep runs the case's model
-(:func:`slipcycle.registry.run_model`, any model: a halfspace case with
+(:func:`slipcycle.run`, any model: a halfspace case with
 ``--set loading.Q1=… --set loading.phase=…`` gives a Ŵ map) for every combination and
 stores the numeric entries of each ``summary.json`` as one cell of a Zarr store
 (:mod:`slipcycle.sweep.core`). What the entries mean comes from the model's own result
@@ -16,7 +16,6 @@ bit.
 
 from __future__ import annotations
 
-import copy
 import math
 import re
 from collections.abc import Mapping
@@ -26,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from slipcycle import registry
+from slipcycle.api import apply_overrides, run
 from slipcycle.io import Case, CaseError, RunOutputs
 from slipcycle.io.case import parse_case_text
 from slipcycle.sweep.core import (
@@ -66,43 +66,6 @@ def parse_set(items: list[str]) -> list[Axis]:
         raise SweepError("--set", "give at least one --set key=start:stop:num")
     check_size([a.size for a in axes], "--set")
     return axes
-
-
-def apply_overrides(data: dict, params: dict) -> dict:
-    """A deep copy of the TOML document ``data`` with dotted keys set to new values.
-
-    Raises
-    ------
-    CaseError
-        If a parent table is missing or an indexed entry does not exist.
-    """
-    data = copy.deepcopy(data)
-    for key, value in params.items():
-        parts = key.split(".")
-        node = data
-        for i, part in enumerate(parts):
-            m = _KEY.match(part)
-            name, idx = m.group(1), m.group(3)
-            last = i == len(parts) - 1
-            where = ".".join(parts[:i + 1])
-            if last and idx is None:
-                if not isinstance(node, dict):
-                    raise CaseError(key, f"{'.'.join(parts[:i])} is not a table")
-                node[name] = value
-                break
-            if name not in node:
-                raise CaseError(where, f"cannot set {key}: [{where}] is not in the case "
-                                "file")
-            child = node[name]
-            if idx is not None:
-                if not isinstance(child, list) or int(idx) >= len(child):
-                    raise CaseError(where, f"has no entry [{idx}] to set")
-                if last:
-                    child[int(idx)] = value
-                    break
-                child = child[int(idx)]
-            node = child
-    return data
 
 
 def _case_with(case_text: str, case_path, params: dict) -> Case:
@@ -220,9 +183,8 @@ def case_task(params: dict, case_text: str, case_path) -> dict:
     """Run the case with ``params`` applied; return :func:`summary_numbers` of its summary.
 
     Module-level so that process pools and Dask workers can unpickle it."""
-    case = _case_with(case_text, case_path, params)
-    out = registry.run_model(case)
-    return summary_numbers(out.summary, getattr(out, "flags", None))
+    result = run(_case_with(case_text, case_path, params))
+    return summary_numbers(result.summary(), result.flags)
 
 
 def make_task(case_text: str, case_path):
@@ -269,7 +231,7 @@ def run_case_sweep(case: Case, sets: list[str], out, *, resume: bool = False,
     Parameters
     ----------
     case : Case
-        A case of any model that :mod:`slipcycle.registry` runs.
+        A case of any model that :func:`slipcycle.run` solves.
     sets : list of str
         ``"key=start:stop:num"`` or ``"key=a,b,c"`` (dotted case keys, ``key[i]`` for a
         list entry); one sweep axis each, Cartesian product.

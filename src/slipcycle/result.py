@@ -1,0 +1,239 @@
+"""The run/result contract shared by every model.
+
+Every solver reached through :func:`slipcycle.run` returns a :class:`RunResult`: one object
+that carries the same vocabulary for every model and builds, on request, what
+``slipcycle run`` writes.
+
+Shared fields (the same names, meanings and units for every model):
+
+- ``steady_state`` (:class:`SteadyState`): the class of the cycle reached, one enumeration
+  across models; ``steady_state_detail`` keeps the model's own word.
+- ``dissipation_per_cycle``: friction dissipation over the last cycle run [J, or J/m for
+  plane contacts]; None where no cycle could be completed (gross slip).
+- ``cycles_run``: load cycles run after the assembly.
+- ``residual``: the model's relative steadiness residual of the last cycle [1].
+- ``converged``: whether the periodic steady state was reached within the tolerance.
+- ``message``: one sentence saying what happened.
+
+Methods: :meth:`RunResult.summary` (the ``summary.json`` dictionary, with ``units``),
+:meth:`RunResult.to_dataset` (the one place a result's :class:`xarray.Dataset` is built),
+:meth:`RunResult.figures` (name -> function drawing a matplotlib Figure),
+:meth:`RunResult.to_outputs` (all of it as :class:`~slipcycle.io.RunOutputs`), and a
+one-line ``repr`` and a small HTML table for notebooks.
+
+How the words of each model map onto :class:`SteadyState`:
+
+==============  ====================================  ======================================
+model           model word (``steady_state_detail``)  ``steady_state``
+==============  ====================================  ======================================
+halfspace       ``steady``, no slider slips           ``shakedown``
+halfspace       ``steady``, some slider slips         ``cyclic_slip``
+halfspace       ``gross_slip``                        ``gross_slip``
+halfspace       ``not_converged``                     ``not_converged``
+discrete        ``shakedown`` / ``cyclic_slip`` /     the same word
+                ``ratcheting`` / ``not_converged``
+rods            ``stuck`` (converged, no slip)        ``shakedown``
+rods            ``slipping`` (converged, slip)        ``cyclic_slip``
+rods            ``not_converged``                     ``not_converged``
+==============  ====================================  ======================================
+
+A half-space slider "slips" when its total slip over the steady cycle exceeds
+``PERMANENT_STICK_TOL`` of the largest elastic tangential travel (the same test as the
+permanent stick zone, Barber 2012, §4.3); a rod interface slips when its dissipation
+exceeds 1e-12 of max|T| · ptp(δ) over the cycle. ``inadmissible`` is the class of an
+assembly state that cannot be held at θ = 0 (discrete basin maps).
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import TYPE_CHECKING, Any, ClassVar
+
+if TYPE_CHECKING:  # pragma: no cover
+    import xarray as xr
+
+    from slipcycle.io.results import RunOutputs
+
+__all__ = ["SteadyState", "STEADY_STATES", "RunResult", "classify"]
+
+
+class SteadyState(StrEnum):
+    """Class of the cycle a run reached; one enumeration for every model.
+
+    ``shakedown``: nothing slips in the steady cycle (separation may still occur);
+    ``cyclic_slip``: some of the interface slips back and forth every cycle, the rest
+    sticks; ``ratcheting``: slip accumulates by the same amount every cycle;
+    ``gross_slip``: the contact cannot carry the tangential load (no periodic state);
+    ``not_converged``: no periodic state within the cycles allowed; ``inadmissible``: the
+    initial or assembly state cannot be held.
+    """
+
+    SHAKEDOWN = "shakedown"
+    CYCLIC_SLIP = "cyclic_slip"
+    RATCHETING = "ratcheting"
+    GROSS_SLIP = "gross_slip"
+    NOT_CONVERGED = "not_converged"
+    INADMISSIBLE = "inadmissible"
+
+
+#: every word of :class:`SteadyState`, in order (position = code in sweep stores)
+STEADY_STATES: tuple[str, ...] = tuple(s.value for s in SteadyState)
+
+
+def classify(*, converged: bool, slips: bool, gross_slip: bool = False,
+             ratcheting: bool = False) -> SteadyState:
+    """The :class:`SteadyState` of a run from its outcome.
+
+    Parameters
+    ----------
+    converged : bool
+        Whether a periodic (or ratcheting) state was reached within the tolerance.
+    slips : bool
+        Whether any part of the interface slips in the last cycle (tested by the model
+        with a tolerance scaled to the problem).
+    gross_slip : bool, optional
+        The contact could not carry the load (takes precedence).
+    ratcheting : bool, optional
+        The state drifts by the same amount every cycle.
+
+    Returns
+    -------
+    SteadyState
+    """
+    if gross_slip:
+        return SteadyState.GROSS_SLIP
+    if not converged:
+        return SteadyState.NOT_CONVERGED
+    if ratcheting:
+        return SteadyState.RATCHETING
+    return SteadyState.CYCLIC_SLIP if slips else SteadyState.SHAKEDOWN
+
+
+def _fmt(value: Any) -> str:
+    if value is None:
+        return "None"
+    if isinstance(value, bool):
+        return str(value)
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else f"{value:.6g}"
+    return str(value)
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class RunResult:
+    """Base of every model's result: the shared vocabulary and the output methods.
+
+    Subclasses (one per model: :class:`slipcycle.halfspace.outputs.HalfspaceResult`,
+    :class:`slipcycle.discrete.case.DiscreteResult`, :class:`slipcycle.rods.case.RodsResult`)
+    add the solver's own results as fields and implement :meth:`summary`,
+    :meth:`to_dataset` and :meth:`figures`, and set :attr:`flags`.
+
+    Attributes
+    ----------
+    steady_state : SteadyState
+        Class of the cycle reached (see the module docstring for each model's mapping).
+    steady_state_detail : str
+        The model's own word for it (the ``steady_state`` of a half-space summary).
+    dissipation_per_cycle : float or None
+        Friction dissipation over the last cycle run [``dissipation_unit``]; None when no
+        cycle was completed.
+    cycles_run : int
+        Load cycles run after the assembly.
+    residual : float
+        Relative steadiness residual of the last cycle [1] (model-specific norm).
+    converged : bool
+        Whether the periodic steady state was reached within the tolerance.
+    message : str
+        One sentence saying what happened.
+    dissipation_unit : str
+        ``"J"``, or ``"J/m"`` for plane (per unit length) contacts.
+    """
+
+    #: the ``model = "..."`` name of the result's model
+    model: ClassVar[str] = ""
+
+    steady_state: SteadyState
+    steady_state_detail: str
+    dissipation_per_cycle: float | None
+    cycles_run: int
+    residual: float
+    converged: bool
+    message: str
+    dissipation_unit: str = "J"
+
+    # -- what each model provides --------------------------------------------------------
+    @property
+    def flags(self) -> dict[str, tuple[str, ...]]:
+        """Every word each categorical summary entry can take (see ``RunOutputs.flags``)."""
+        return {"steady_state_class": STEADY_STATES}
+
+    def summary(self) -> dict:
+        """The ``summary.json`` dictionary of the run, with its ``units`` map.
+
+        Returns
+        -------
+        dict
+            The numbers a user quotes; ``summary()["units"]`` gives the unit of every
+            numeric entry. Always holds ``steady_state_class`` (a :class:`SteadyState`
+            word).
+        """
+        raise NotImplementedError
+
+    def to_dataset(self) -> xr.Dataset:
+        """The full histories as an :class:`xarray.Dataset` (every variable has units).
+
+        The only place the Dataset of this result is built; a new Dataset on each call.
+        """
+        raise NotImplementedError
+
+    def figures(self, dataset: xr.Dataset | None = None) -> dict[str, Any]:
+        """Figure name -> function returning a matplotlib Figure (drawn when called).
+
+        Parameters
+        ----------
+        dataset : xarray.Dataset, optional
+            The result of :meth:`to_dataset`, if already built (else built here).
+        """
+        return {}
+
+    # -- shared ----------------------------------------------------------------------------
+    def to_outputs(self) -> RunOutputs:
+        """Summary, Dataset, figures and flags, as ``slipcycle run`` writes them.
+
+        Returns
+        -------
+        RunOutputs
+        """
+        from slipcycle.io.results import RunOutputs
+
+        ds = self.to_dataset()
+        return RunOutputs(summary=self.summary(), dataset=ds, figures=self.figures(ds),
+                          flags=dict(self.flags))
+
+    def _shared(self) -> list[tuple[str, Any, str]]:
+        return [("steady_state", f"{self.steady_state.value} ({self.steady_state_detail})", ""),
+                ("dissipation_per_cycle", self.dissipation_per_cycle, self.dissipation_unit),
+                ("cycles_run", self.cycles_run, ""),
+                ("residual", self.residual, "1"),
+                ("converged", self.converged, ""),
+                ("message", self.message, "")]
+
+    def __repr__(self) -> str:
+        d = self.dissipation_per_cycle
+        diss = "None" if d is None else f"{_fmt(float(d))} {self.dissipation_unit}"
+        return (f"<{type(self).__name__} {self.model}: {self.steady_state.value} "
+                f"({self.steady_state_detail}), dissipation_per_cycle={diss}, "
+                f"cycles_run={self.cycles_run}, residual={_fmt(float(self.residual))}, "
+                f"converged={self.converged}>")
+
+    def _repr_html_(self) -> str:
+        rows = "".join(
+            f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
+            f"<td>{html.escape(_fmt(v))}</td><td>{html.escape(u)}</td></tr>"
+            for k, v, u in self._shared())
+        return (f"<table><caption>{html.escape(type(self).__name__)} "
+                f"({html.escape(self.model)})</caption>"
+                f"<tr><th>quantity</th><th>value</th><th>unit</th></tr>{rows}</table>")
