@@ -27,6 +27,7 @@ from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.steady import simulate
 from slipcycle.fe.builders import block_on_rigid
+from slipcycle.fe.loads import combined_loads
 from slipcycle.fe.reduction import reduce_problem
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -41,14 +42,7 @@ def block():
                                       elements=model["elements"],
                                       thickness=model["thickness"]))
     d = model["discrete"]
-    q0, p0 = r.combine(**d["mean"])
-    cq, cp = np.zeros(r.n, complex), np.zeros(r.n, complex)
-    for name, amp in d["amplitude"].items():
-        q, p = r.case(name)
-        z = amp * np.exp(1j * d["phase"].get(name, 0.0))
-        cq, cp = cq + z * q, cp + z * p
-    load = DiscreteLoad.harmonic(p0, q0, p1=np.abs(cp), q1=np.abs(cq),
-                                 p1_phase=np.angle(cp), q1_phase=np.angle(cq))
+    load = DiscreteLoad(*combined_loads(r, d["mean"], d["amplitude"], d.get("phase", {})))
     system = FrictionalSystem(r.A, r.B, r.C, d["friction"])
     slid = tomllib.loads((EXAMPLES / "fe_block_nu03_slid_discrete.toml").read_text())
     protocol = np.array([np.concatenate([s["q_w"], s["p_w"]])

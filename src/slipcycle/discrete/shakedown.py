@@ -52,7 +52,8 @@ from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.loading import HarmonicLoad
 
-__all__ = ["SafeRegion", "safe_region", "lambda2", "lambda1", "redundant_constraints",
+__all__ = ["FrictionConstraints", "friction_constraints", "SafeRegion", "safe_region",
+           "lambda2", "lambda1", "redundant_constraints",
            "polygon_vertices", "admissible_region_at", "sample_initial_slips",
            "simulation_brackets", "Brackets", "constraint_names", "run_criteria",
            "refine_brackets", "Refinement", "extreme_constraints", "safe_vertices"]
@@ -71,6 +72,91 @@ def constraint_names(n: int) -> list[str]:
         return ["II (node 0, q=−fp)", "I (node 0, q=+fp)", "IV (node 1, q=−fp)",
                 "III (node 1, q=+fp)"]
     return [f"node {j} {'q=−fp' if s > 0 else 'q=+fp'}" for j in range(n) for s in (1, -1)]
+
+
+@dataclass(frozen=True)
+class FrictionConstraints:
+    """The 2N all-contact Coulomb constraints of a discrete system, in slip space.
+
+    Constraint k = (j, s), s = ±1, with every node in contact (w = 0), so that
+    q = q^w + A v and p = p^w + B v:
+
+        s q_j + f_j p_j ≥ 0   ⇔   D_k · v + c_k ≥ 0,
+        D_k = s A_j + f_j B_j,   c_k = s q^w_j + f_j p^w_j.
+
+    Row 2j is s = +1 (q_j ≥ −f_j p_j, drives positive slip), row 2j+1 is s = −1
+    (q_j ≤ f_j p_j); the order of :func:`constraint_names`. The safe-region LP uses the
+    "≤" form G v ≤ c with G = −D (:func:`safe_region`, :func:`admissible_region_at`); the
+    sampled reference :func:`extreme_constraints` the "≥" form D v ≥ −c.
+
+    Attributes
+    ----------
+    rows : (2N, N) array
+        D_k = s A_j + f_j B_j [N/m].
+    node : (2N,) int array
+        j of each row.
+    sign : (2N,) array
+        s of each row, ±1.
+    friction : (2N,) array
+        f_j of each row.
+
+    References
+    ----------
+    A. Klarbring, M. Ciavarella, J. R. Barber, Int. J. Solids Struct. 44 (2007)
+    8355–8365, eq. (9); Y. J. Ahn, E. Bertocchi, J. R. Barber, J. Mech. Phys. Solids 56
+    (2008) 3433–3440, §2.
+    """
+
+    rows: np.ndarray
+    node: np.ndarray
+    sign: np.ndarray
+    friction: np.ndarray
+
+    @property
+    def n_nodes(self) -> int:
+        return self.rows.shape[1]
+
+    def rhs(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """c = s q_j + f_j p_j for tangential and normal loads q, p (..., N) [N] → (..., 2N)."""
+        q, p = np.asarray(q, float), np.asarray(p, float)
+        return self.sign * q[..., self.node] + self.friction * p[..., self.node]
+
+    def load_matrix(self) -> np.ndarray:
+        """S (2N, 2N) with c = S [q; p] for stacked loads r = [q, p] [dimensionless]."""
+        n = self.n_nodes
+        S = np.zeros((2 * n, 2 * n))
+        k = np.arange(2 * n)
+        S[k, self.node] = self.sign
+        S[k, n + self.node] = self.friction
+        return S
+
+
+def friction_constraints(system: FrictionalSystem) -> FrictionConstraints:
+    """The 2N all-contact friction constraints of ``system`` (:class:`FrictionConstraints`).
+
+    The one place that builds their geometry; :func:`safe_region`,
+    :func:`admissible_region_at` (hence the basin maps and the random initial states) and
+    :func:`extreme_constraints` all use it.
+
+    Parameters
+    ----------
+    system : FrictionalSystem
+        A, B (N, N) [N/m] and the friction coefficients f (N,).
+
+    Returns
+    -------
+    FrictionConstraints
+        Rows s A_j + f_j B_j [N/m] in the order (j, s = +1), (j, s = −1), j = 0…N−1.
+    """
+    n = system.n_nodes
+    f = np.asarray(system.friction, dtype=float)
+    node = np.repeat(np.arange(n), 2)
+    sign = np.tile([1.0, -1.0], n)
+    rows = np.zeros((2 * n, n))
+    for k in range(2 * n):
+        j = node[k]
+        rows[k] = sign[k] * system.A[j] + f[j] * system.B[j]
+    return FrictionConstraints(rows, node, sign, f[node])
 
 
 @dataclass(frozen=True)
@@ -130,13 +216,7 @@ class SafeRegion:
 # ---------------------------------------------------------------------------------------
 def _periodic_part(system: FrictionalSystem, load: DiscreteLoad):
     """c0 (2N,) and a function θ (n,) → c1(θ) (n, 2N) of the constraint right-hand sides."""
-    n = system.n_nodes
-    f = system.friction
-    S = np.zeros((2 * n, 2 * n))          # rows k, columns [q, p]
-    for j in range(n):
-        for i, s in enumerate((1.0, -1.0)):
-            S[2 * j + i, j] = s
-            S[2 * j + i, n + j] = f[j]
+    S = friction_constraints(system).load_matrix()   # rows k, columns [q, p]
     mean_load = load.with_lam(0.0)
     unit_load = load.with_lam(1.0)
     c0 = S @ mean_load(np.array([0.0]))[0]
@@ -195,11 +275,7 @@ def safe_region(system: FrictionalSystem, load: DiscreteLoad, samples: int = 409
     SafeRegion
     """
     n = system.n_nodes
-    f = system.friction
-    G = np.zeros((2 * n, n))
-    for j in range(n):
-        G[2 * j] = -(system.A[j] + f[j] * system.B[j])
-        G[2 * j + 1] = -(-system.A[j] + f[j] * system.B[j])
+    G = -friction_constraints(system).rows
     c0, c1 = _periodic_part(system, load)
     H = _harmonic_order(load)
     m = np.zeros(2 * n)
@@ -390,8 +466,9 @@ def extreme_constraints(system: FrictionalSystem, load: DiscreteLoad, steps: int
                         ) -> tuple[np.ndarray, np.ndarray]:
     """Extreme positions of the 2N all-contact friction constraints in v-space, sampled.
 
-    A brute-force reference for :func:`safe_region` (same rows, opposite sign convention)
-    and the geometry of the single-run v-space figure.
+    A brute-force reference for :func:`safe_region` (same rows from
+    :func:`friction_constraints`, in the "≥" form: G here is −G there) and the geometry of
+    the single-run v-space figure.
 
     Constraint (j, s), s = ±1: s q_j + f_j p_j ≥ 0 with w = 0, i.e.
     (s A_j + f_j B_j) · v ≥ −(s q^w_j(θ) + f_j p^w_j(θ)). Its extreme position is the largest
@@ -412,14 +489,8 @@ def extreme_constraints(system: FrictionalSystem, load: DiscreteLoad, steps: int
     n = system.n_nodes
     th = np.linspace(0, 2 * np.pi, steps + 1)
     r = load(th)
-    qw, pw = r[:, :n], r[:, n:]
-    f = system.friction
-    G, h = [], []
-    for j in range(n):
-        for s in (1.0, -1.0):
-            G.append(s * system.A[j] + f[j] * system.B[j])
-            h.append(np.max(-(s * qw[:, j] + f[j] * pw[:, j])))
-    return np.array(G), np.array(h)
+    fc = friction_constraints(system)
+    return fc.rows, np.max(-fc.rhs(r[:, :n], r[:, n:]), axis=0)
 
 
 
@@ -465,16 +536,9 @@ def admissible_region_at(system: FrictionalSystem, load: DiscreteLoad, theta: fl
     Returns G (2N, N) [N/m] and b (2N,) [N] at angle ``theta`` for the load's own λ.
     """
     n = system.n_nodes
-    f = system.friction
     r = load(np.array([theta]))[0]
-    q, p = r[:n], r[n:]
-    G = np.zeros((2 * n, n))
-    b = np.zeros(2 * n)
-    for j in range(n):
-        for i, s in enumerate((1.0, -1.0)):
-            G[2 * j + i] = -(s * system.A[j] + f[j] * system.B[j])
-            b[2 * j + i] = s * q[j] + f[j] * p[j]
-    return G, b
+    fc = friction_constraints(system)
+    return -fc.rows, fc.rhs(r[:n], r[n:])
 
 
 def sample_initial_slips(system: FrictionalSystem, load: DiscreteLoad, count: int,

@@ -25,6 +25,7 @@ _LAZY = {
     "read_mesh_body": "meshfile",
     "LoadCase": "reduction", "Problem": "reduction", "ReducedModel": "reduction",
     "reduce_problem": "reduction",
+    "combined_loads": "loads",
     "coupling_ratio": "checks", "dundurs_beta": "checks",
 }
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from slipcycle.fe import builders
+from slipcycle.fe.loads import combined_loads
 from slipcycle.fe.reduction import Problem, ReducedModel
 from slipcycle.io.case import Case, CaseError, Section
 
@@ -148,7 +149,8 @@ def discrete_case_text(table: dict, reduced: ReducedModel, stiffness_file: str,
 
     p^w(θ) = Σ_c mean_c p_c + λ Re[Σ_c amplitude_c e^{i phase_c} p_c e^{iθ}] per node
     (the gap case enters the mean with factor 1 unless set), and likewise q^w; written
-    as p0, p1, p1_phase (and q0, q1, q1_phase).
+    as p0, p1, p1_phase (and q0, q1, q1_phase): the text form of
+    :func:`slipcycle.fe.loads.combined_loads`.
     """
     names = reduced.load_cases
     for part in ("mean", "amplitude", "phase"):
@@ -156,14 +158,8 @@ def discrete_case_text(table: dict, reduced: ReducedModel, stiffness_file: str,
             if k not in names:
                 raise CaseError(f"{key}.{part}.{k}", f"unknown load case; the model has "
                                 f"{', '.join(names)}")
-    mean = {n: table["mean"].get(n, 1.0 if n == "gap" else 0.0) for n in names}
-    q0, p0 = reduced.combine(**mean)
-    cq = np.zeros(reduced.n, complex)
-    cp = np.zeros(reduced.n, complex)
-    for i, n in enumerate(names):
-        a = table["amplitude"].get(n, 0.0) * np.exp(1j * table["phase"].get(n, 0.0))
-        cq += a * reduced.q_w[i]
-        cp += a * reduced.p_w[i]
+    p, q = combined_loads(reduced, table["mean"], table["amplitude"], table["phase"],
+                          table["lam"])
 
     def arr(x):
         return "[" + ", ".join(f"{v:.12g}" for v in np.asarray(x, float)) + "]"
@@ -176,13 +172,13 @@ def discrete_case_text(table: dict, reduced: ReducedModel, stiffness_file: str,
         f'stiffness_file = "{stiffness_file}"',
         f"friction = {friction:.12g}",
         "[loading]",
-        f"lam = {table['lam']:.12g}",
-        f"p0 = {arr(p0)}",
-        f"q0 = {arr(q0)}",
-        f"p1 = {arr(np.abs(cp))}",
-        f"p1_phase = {arr(np.angle(cp))}",
-        f"q1 = {arr(np.abs(cq))}",
-        f"q1_phase = {arr(np.angle(cq))}",
+        f"lam = {p.lam:.12g}",
+        f"p0 = {arr(p.mean)}",
+        f"q0 = {arr(q.mean)}",
+        f"p1 = {arr(p.amplitudes[0])}",
+        f"p1_phase = {arr(p.phases[0])}",
+        f"q1 = {arr(q.amplitudes[0])}",
+        f"q1_phase = {arr(q.phases[0])}",
         "[run]",
         f"cycles = {table['cycles']}",
         f"steps_per_cycle = {table['steps_per_cycle']}",

@@ -31,7 +31,8 @@ from slipcycle.rods.model import INTERFACES, Excitation, Rod, TwoRods
 _LAZY = {
     "RodsCase": "case", "analyse": "case", "interface_bed": "case",
     "Bed": "interfaces", "SegalmanIwan": "interfaces", "make_bed": "interfaces",
-    "fit_iwan": "interfaces",
+    "fit_iwan": "interfaces", "InterfaceLaw": "interfaces", "interface_law": "interfaces",
+    "INTERFACE_LAWS": "interfaces", "gross_slip_torque": "model",
     "omega1": "welded", "natural_frequencies": "welded", "interface_torque_frf": "welded",
     "ModalBasis": "modal", "DynamicResult": "modal", "modal_basis": "modal",
     "steady_state": "modal",

@@ -169,14 +169,14 @@ def interface_bed(rc: RodsCase):
     run``, ``slipcycle limits`` and the Python API alike; an Iwan element uses the given
     ``iwan_chi``/``iwan_beta`` (else the fit to the rings) at the mean normal force F0.
     """
-    from slipcycle.rods.interfaces import SegalmanIwan, iwan_bed, make_bed
+    from slipcycle.rods.interfaces import SegalmanIwan, gross_slip_torque, iwan_bed, make_bed
 
     rods, N0 = rc.rods, rc.exc.axial_force
     if rods.interface != "iwan":
         return make_bed(rods, N0, rc.rings), None
     params = None
     if rc.iwan_chi is not None:
-        params = SegalmanIwan(2.0 / 3.0 * rods.friction * N0 * rods.contact_radius,
+        params = SegalmanIwan(gross_slip_torque(rods.friction, N0, rods.contact_radius),
                               rods.interface_stiffness * rods.contact_J, rc.iwan_chi,
                               rc.iwan_beta)
     return iwan_bed(rods, N0, None, params)

@@ -37,17 +37,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-from slipcycle.rods.model import TwoRods
+from slipcycle.rods.model import TwoRods, gross_slip_torque
 
-__all__ = ["Bed", "make_bed", "distributed_bed", "jenkins_bed", "coulomb_bed", "welded_bed",
+__all__ = ["gross_slip_torque", "InterfaceLaw", "Welded", "DistributedRings", "Coulomb",
+           "Jenkins", "Iwan", "INTERFACE_LAWS", "interface_law", "Bed", "make_bed",
+           "distributed_bed", "jenkins_bed", "coulomb_bed", "welded_bed",
            "iwan_bed", "SegalmanIwan", "segalman_density", "fit_iwan",
            "distributed_backbone", "distributed_dissipation", "distributed_dissipation_rotation",
            "distributed_torque_to_rotation",
            "jenkins_dissipation", "bed_dissipation", "bed_rotation_at_torque",
            "iwan_discretisation_error", "IWAN_RTOL", "IWAN_T_MIN"]
+
+
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,11 @@ class Bed:
     @property
     def size(self) -> int:
         return int(self.kappa.size)
+
+    @property
+    def is_frictional(self) -> bool:
+        """Whether the interface can slip (every law but ``welded``)."""
+        return INTERFACE_LAWS[self.kind].is_frictional
 
     @property
     def stiffness(self) -> float:
@@ -112,13 +122,14 @@ def distributed_bed(rods: TwoRods, rings: int = 100) -> Bed:
 def jenkins_bed(rods: TwoRods) -> Bed:
     """One spring–slider with the distributed model's initial stiffness and capacity."""
     return Bed("jenkins", np.array([rods.interface_stiffness * rods.contact_J]),
-               np.array([2.0 / 3.0 * rods.friction * rods.contact_radius]))
+               np.array([gross_slip_torque(rods.friction, 1.0, rods.contact_radius)]))
 
 
 def coulomb_bed(rods: TwoRods) -> Bed:
     """Rigid–plastic, capacity (2/3) f N a."""
     return Bed("coulomb", np.array([np.inf]),
-               np.array([2.0 / 3.0 * rods.friction * rods.contact_radius]), rigid=True)
+               np.array([gross_slip_torque(rods.friction, 1.0, rods.contact_radius)]),
+               rigid=True)
 
 
 def welded_bed(rods: TwoRods) -> Bed:
@@ -426,7 +437,7 @@ def fit_iwan(rods: TwoRods, N: float, points: int = 40) -> tuple[SegalmanIwan, f
     """
     from scipy.optimize import least_squares
 
-    FS = 2.0 / 3.0 * rods.friction * N * rods.contact_radius
+    FS = gross_slip_torque(rods.friction, N, rods.contact_radius)
     KT = rods.interface_stiffness * rods.contact_J
     Tk = np.linspace(0.05, 0.97, points) * FS
     Dd = distributed_dissipation(rods, N, Tk)
@@ -461,17 +472,207 @@ def iwan_bed(rods: TwoRods, N_ref: float, elements: int | None = None,
     return Bed("iwan", kappa, cap / N_ref), iw
 
 
+# ---------------------------------------------------------------------------------------
+# interface laws as types
+# ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class InterfaceLaw:
+    """One rods interface law: its bed of Jenkins elements and its lumped properties.
+
+    Subclasses (:class:`Welded`, :class:`DistributedRings`, :class:`Coulomb`,
+    :class:`Jenkins`, :class:`Iwan`) are small frozen dataclasses holding the law's own
+    options; :data:`INTERFACE_LAWS` maps the names of ``TwoRods.interface`` to them and
+    :func:`interface_law` builds one from a name, so that no solver compares names.
+
+    Attributes
+    ----------
+    name : str
+        The ``interface`` key (class attribute).
+    is_frictional : bool
+        Whether the interface can slip (False for ``welded`` only).
+    rigid : bool
+        Rigid (κ = ∞) single element: ``welded`` and ``coulomb``.
+    needs_interface_stiffness : bool
+        Whether the law uses the tangential stiffness k_t (N/m³).
+    """
+
+    name: ClassVar[str] = ""
+    is_frictional: ClassVar[bool] = True
+    rigid: ClassVar[bool] = False
+    needs_interface_stiffness: ClassVar[bool] = True
+
+    @classmethod
+    def from_options(cls, *, rings: int = 100, iwan: SegalmanIwan | None = None
+                     ) -> InterfaceLaw:
+        """The law with the options that concern it (the others are ignored)."""
+        return cls()
+
+    def bed(self, rods: TwoRods, N_ref: float) -> Bed:
+        """The law as a bed of Jenkins elements (capacities per unit normal force).
+
+        Parameters
+        ----------
+        rods : TwoRods
+            Contact radius a (m), friction f, tangential stiffness k_t (N/m³).
+        N_ref : float
+            Reference normal force (N); used by the Iwan element only.
+        """
+        raise NotImplementedError
+
+    def stiffness(self, rods: TwoRods) -> float:
+        """Stuck torsional stiffness k_t J_a (N m/rad), J_a = π a⁴/2; inf if rigid."""
+        return math.inf if self.rigid else rods.interface_stiffness * rods.contact_J
+
+    def gross_slip_torque(self, rods: TwoRods, N: float) -> float:
+        """Torque capacity (2/3) f N a (N m) (:func:`gross_slip_torque`); inf if welded."""
+        return gross_slip_torque(rods.friction, N, rods.contact_radius)
+
+    def slip_inception_torque(self, rods: TwoRods, N: float) -> float:
+        """Torque at which slip starts from the unloaded state (N m): the rim's
+        τ(a) = f p, T_s = f p J_a/a, for the distributed laws; gross slip for lumped ones."""
+        return rods.friction * rods.pressure(N) * rods.contact_J / rods.contact_radius
+
+
+@dataclass(frozen=True)
+class Welded(InterfaceLaw):
+    """No slip: rigid, infinite capacity."""
+
+    name: ClassVar[str] = "welded"
+    is_frictional: ClassVar[bool] = False
+    rigid: ClassVar[bool] = True
+    needs_interface_stiffness: ClassVar[bool] = False
+
+    def bed(self, rods: TwoRods, N_ref: float) -> Bed:
+        return welded_bed(rods)
+
+    def gross_slip_torque(self, rods: TwoRods, N: float) -> float:
+        return math.inf
+
+    def slip_inception_torque(self, rods: TwoRods, N: float) -> float:
+        return math.inf
+
+
+@dataclass(frozen=True)
+class DistributedRings(InterfaceLaw):
+    """Rings of equal width over the contact disc (module docstring, ``distributed``).
+
+    Attributes
+    ----------
+    rings : int
+        Number of rings, ≥ 1.
+    """
+
+    name: ClassVar[str] = "distributed"
+    rings: int = 100
+
+    @classmethod
+    def from_options(cls, *, rings: int = 100, iwan: SegalmanIwan | None = None
+                     ) -> DistributedRings:
+        return cls(rings)
+
+    def bed(self, rods: TwoRods, N_ref: float) -> Bed:
+        return distributed_bed(rods, self.rings)
+
+
+@dataclass(frozen=True)
+class Coulomb(InterfaceLaw):
+    """Rigid–plastic, capacity (2/3) f N a."""
+
+    name: ClassVar[str] = "coulomb"
+    rigid: ClassVar[bool] = True
+    needs_interface_stiffness: ClassVar[bool] = False
+
+    def bed(self, rods: TwoRods, N_ref: float) -> Bed:
+        return coulomb_bed(rods)
+
+    def slip_inception_torque(self, rods: TwoRods, N: float) -> float:
+        return self.gross_slip_torque(rods, N)
+
+
+@dataclass(frozen=True)
+class Jenkins(InterfaceLaw):
+    """One spring–slider: stiffness k_t J_a, capacity (2/3) f N a."""
+
+    name: ClassVar[str] = "jenkins"
+
+    def bed(self, rods: TwoRods, N_ref: float) -> Bed:
+        return jenkins_bed(rods)
+
+    def slip_inception_torque(self, rods: TwoRods, N: float) -> float:
+        return self.gross_slip_torque(rods, N)
+
+
+@dataclass(frozen=True)
+class Iwan(InterfaceLaw):
+    """Segalman's four-parameter Iwan element, discretised into Jenkins elements.
+
+    Attributes
+    ----------
+    params : SegalmanIwan, optional
+        The element; None: fitted to the rings at the reference normal force
+        (:func:`fit_iwan`).
+    elements : int, optional
+        Fixed element count; None: chosen for the accuracy target (:func:`segalman_density`).
+    """
+
+    name: ClassVar[str] = "iwan"
+    params: SegalmanIwan | None = None
+    elements: int | None = None
+
+    @classmethod
+    def from_options(cls, *, rings: int = 100, iwan: SegalmanIwan | None = None) -> Iwan:
+        return cls(iwan)
+
+    def fitted(self, rods: TwoRods, N_ref: float) -> Iwan:
+        """The same law with its parameters fixed (fitted at N_ref if not given)."""
+        if self.params is not None:
+            return self
+        return Iwan(fit_iwan(rods, N_ref)[0], self.elements)
+
+    def bed(self, rods: TwoRods, N_ref: float) -> Bed:
+        return iwan_bed(rods, N_ref, self.elements, self.params)[0]
+
+
+#: the interface laws by their ``TwoRods.interface`` name
+INTERFACE_LAWS: dict[str, type[InterfaceLaw]] = {
+    law.name: law for law in (Welded, DistributedRings, Coulomb, Jenkins, Iwan)}
+
+
+def interface_law(name: str, *, rings: int = 100, iwan: SegalmanIwan | None = None
+                  ) -> InterfaceLaw:
+    """The :class:`InterfaceLaw` called ``name`` with its options.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`INTERFACE_LAWS` (``TwoRods.interface``).
+    rings : int
+        Ring count of ``distributed``.
+    iwan : SegalmanIwan, optional
+        Parameters of ``iwan`` (None: fitted when the bed is built).
+
+    Returns
+    -------
+    InterfaceLaw
+        The law's frozen object (``Welded``, ``DistributedRings``, ``Coulomb``, ``Jenkins``
+        or ``Iwan``).
+
+    Raises
+    ------
+    ValueError
+        An unknown name.
+    """
+    try:
+        law = INTERFACE_LAWS[name]
+    except KeyError:
+        raise ValueError(f"interface: must be one of {tuple(INTERFACE_LAWS)}, got "
+                         f"{name!r}") from None
+    return law.from_options(rings=rings, iwan=iwan)
+
+
 def make_bed(rods: TwoRods, N_ref: float, rings: int = 100, iwan: SegalmanIwan | None = None
              ) -> Bed:
     """The bed of ``rods.interface`` (``rings`` rings for ``distributed``; an Iwan element
-    is discretised to its accuracy target, independent of ``rings``)."""
-    kind = rods.interface
-    if kind == "distributed":
-        return distributed_bed(rods, rings)
-    if kind == "jenkins":
-        return jenkins_bed(rods)
-    if kind == "coulomb":
-        return coulomb_bed(rods)
-    if kind == "welded":
-        return welded_bed(rods)
-    return iwan_bed(rods, N_ref, None, iwan)[0]
+    is discretised to its accuracy target, independent of ``rings``):
+    ``interface_law(rods.interface, rings=rings, iwan=iwan).bed(rods, N_ref)``."""
+    return interface_law(rods.interface, rings=rings, iwan=iwan).bed(rods, N_ref)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from slipcycle.io.sizes import check_memory
-from slipcycle.rods.interfaces import Bed
+from slipcycle.rods.interfaces import Bed, Welded, gross_slip_torque, interface_law
 from slipcycle.rods.modal import ModalBasis, Propagator, modal_basis, steady_state
 from slipcycle.rods.model import Excitation, TwoRods
 from slipcycle.rods.quasistatic import quasi_static_loop
@@ -104,7 +104,7 @@ class Study:
 
     @property
     def undamped_welded(self) -> bool:
-        return self.rods.damping_ratio == 0.0 and self.bed.kind == "welded"
+        return self.rods.damping_ratio == 0.0 and not self.bed.is_frictional
 
     def poles(self, max_ratio: float) -> np.ndarray:
         """Pole frequency ratios Ω/ω1 ≤ max_ratio (empty unless welded and undamped)."""
@@ -113,7 +113,7 @@ class Study:
         key = ("poles", max_ratio)
         if key not in self._qs:
             n = int(max_ratio * 1.05) + 2
-            w = natural_frequencies(self.rods.with_(interface="welded"), n) / self.omega1
+            w = natural_frequencies(self.rods.with_(interface=Welded.name), n) / self.omega1
             self._qs[key] = w[w <= max_ratio * (1 + POLE_RTOL)]
         return self._qs[key]
 
@@ -158,8 +158,8 @@ class Study:
 
 def gross_slip_amplitude(rods: TwoRods, N: float) -> float:
     """Θ_g = T_g (C_r + 1/k0): the amplitude at which a stuck interface carries T_g (rad)."""
-    k0 = rods.interface_torsional_stiffness
-    Tg = 2.0 / 3.0 * rods.friction * N * rods.contact_radius
+    k0 = interface_law(rods.interface).stiffness(rods)
+    Tg = gross_slip_torque(rods.friction, N, rods.contact_radius)
     return Tg * (rods.rods_compliance + (1.0 / k0 if math.isfinite(k0) else 0.0))
 
 

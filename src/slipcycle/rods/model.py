@@ -23,7 +23,7 @@ import numpy as np
 
 from slipcycle.errors import InputError
 
-__all__ = ["Rod", "TwoRods", "Excitation", "INTERFACES"]
+__all__ = ["Rod", "TwoRods", "Excitation", "INTERFACES", "gross_slip_torque"]
 
 INTERFACES = ("welded", "distributed", "coulomb", "jenkins", "iwan")
 
@@ -45,6 +45,37 @@ def _check(name: str, value, *, gt: float | None = None, ge: float | None = None
         raise InputError(name, f"must be <= {le:g}, got {value:g}")
     if lt is not None and not value < lt:
         raise InputError(name, f"must be < {lt:g}, got {value:g}")
+
+
+def gross_slip_torque(friction: float, normal_force: float, contact_radius: float) -> float:
+    """Torque that makes the whole contact disc slip under uniform pressure (N m).
+
+    With the pressure p = N/(π a²) uniform over the disc 0 ≤ ρ ≤ a and the shear at its
+    Coulomb limit f p everywhere, T_g = ∫ f p ρ 2πρ dρ = (2/3) π f p a³ = (2/3) f N a.
+    This is the capacity of every lumped interface law (``jenkins``, ``coulomb``), the sum
+    of the ring capacities of ``distributed``, the F_S of the fitted Iwan element, and the
+    scale of the gross-slip amplitude Θ_g; the one place it is written.
+
+    Parameters
+    ----------
+    friction : float
+        Coulomb coefficient f ≥ 0 (dimensionless).
+    normal_force : float
+        Compressive normal force N (N); 1.0 gives the capacity per unit normal force (m).
+    contact_radius : float
+        Radius a of the contact disc (m).
+
+    Returns
+    -------
+    float
+        T_g = (2/3) f N a (N m).
+
+    References
+    ----------
+    Johnson, K. L. (1985). Contact Mechanics, Cambridge University Press, §7.3 (torsion of
+    a flat circular contact under uniform pressure).
+    """
+    return 2.0 / 3.0 * friction * normal_force * contact_radius
 
 
 @dataclass(frozen=True)
@@ -219,7 +250,7 @@ class TwoRods:
         """Torque capacity of the whole disc, (2/3) π f p a³ = (2/3) f N a (N m)."""
         if self.interface == "welded":
             return math.inf
-        return 2.0 / 3.0 * self.friction * N * self.contact_radius
+        return gross_slip_torque(self.friction, N, self.contact_radius)
 
     def with_(self, **changes) -> TwoRods:
         """A copy with some fields replaced."""

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from slipcycle.rods.interfaces import Bed
+from slipcycle.rods.interfaces import Bed, gross_slip_torque
 from slipcycle.rods.modal import DynamicResult, ModalBasis, steady_state
 from slipcycle.rods.model import Excitation, TwoRods
 
@@ -30,9 +30,9 @@ def slip_inception_torque_qs(rods: TwoRods, N: float) -> float:
 
 
 def gross_slip_torque_qs(rods: TwoRods, N: float) -> float:
-    """T_g = (2/3) π f p0 a³ = (2/3) f N a (N m)."""
-    return 2.0 / 3.0 * math.pi * rods.friction * N / (math.pi * rods.contact_radius**2) \
-        * rods.contact_radius**3
+    """T_g = (2/3) π f p0 a³ = (2/3) f N a (N m): :func:`~slipcycle.rods.interfaces.
+    gross_slip_torque` of the rods' friction and contact radius."""
+    return gross_slip_torque(rods.friction, N, rods.contact_radius)
 
 
 def quasi_static_basis(rods: TwoRods) -> ModalBasis:

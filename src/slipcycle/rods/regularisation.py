@@ -21,14 +21,7 @@ import math
 
 import numpy as np
 
-from slipcycle.rods.interfaces import (
-    Bed,
-    SegalmanIwan,
-    coulomb_bed,
-    distributed_bed,
-    iwan_bed,
-    jenkins_bed,
-)
+from slipcycle.rods.interfaces import Bed, Iwan, SegalmanIwan, gross_slip_torque, interface_law
 from slipcycle.rods.model import Excitation, TwoRods
 from slipcycle.rods.quasistatic import quasi_static_loop
 
@@ -59,19 +52,16 @@ def regularisation_study(rods: TwoRods, exc: Excitation, rings: int = 100,
         arrays (N m, J), ``slope_microslip`` and ``slope_macroslip``; ``iwan`` parameters.
     """
     N0 = exc.axial_force
-    Tg = 2.0 / 3.0 * rods.friction * N0 * rods.contact_radius
+    Tg = gross_slip_torque(rods.friction, N0, rods.contact_radius)
     k0 = rods.interface_stiffness * rods.contact_J
     theta_g = Tg * (rods.rods_compliance + 1.0 / k0)
     amps = theta_g * np.unique(np.concatenate([np.geomspace(0.03, 30.0, points),
                                                np.linspace(0.77, 0.99, 8)]))
     points = amps.size
-    beds: dict[str, Bed] = {
-        "distributed": distributed_bed(rods, rings),
-        "jenkins": jenkins_bed(rods),
-        "coulomb": coulomb_bed(rods),
-    }
-    ib, iw = iwan_bed(rods, N0, None, iwan)
-    beds["iwan"] = ib
+    laws = {name: interface_law(name, rings=rings, iwan=iwan) for name in REG_MODELS}
+    laws[Iwan.name] = iwan_law = laws[Iwan.name].fitted(rods, N0)  # fit once, report it
+    beds: dict[str, Bed] = {name: law.bed(rods, N0) for name, law in laws.items()}
+    iw = iwan_law.params
     out: dict = {"amplitude": amps, "gross_slip_torque": Tg,
                  "iwan_params": {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi, "beta": iw.beta}}
     for name in REG_MODELS:
