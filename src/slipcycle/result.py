@@ -42,6 +42,11 @@ A half-space slider "slips" when its total slip over the steady cycle exceeds
 permanent stick zone, Barber 2012, §4.3); a rod interface slips when its dissipation
 exceeds 1e-12 of max|T| · ptp(δ) over the cycle. ``inadmissible`` is the class of an
 assembly state that cannot be held at θ = 0 (discrete basin maps).
+
+Every analysis (the discrete shakedown study and basin maps, the half-space Ŵ map, the
+rods limits) returns a :class:`StudyResult` with the same methods: ``summary()``,
+``to_dataset()``, ``figures()``, ``flags``, ``to_outputs()`` (what its command writes), a
+one-line ``repr`` of its headline numbers and a small HTML table.
 """
 
 from __future__ import annotations
@@ -57,7 +62,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from slipcycle.io.results import RunOutputs
 
-__all__ = ["SteadyState", "STEADY_STATES", "RunResult", "classify"]
+__all__ = ["SteadyState", "STEADY_STATES", "RunResult", "StudyResult", "classify"]
 
 
 class SteadyState(StrEnum):
@@ -119,11 +124,63 @@ def _fmt(value: Any) -> str:
         return str(value)
     if isinstance(value, float):
         return "nan" if math.isnan(value) else f"{value:.6g}"
+    if hasattr(value, "tolist") and not isinstance(value, str):  # NumPy arrays, scalars
+        return _fmt(value.tolist())
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_fmt(v) for v in value) + "]"
     return str(value)
 
 
+def _html_table(caption: str, rows: list[tuple[str, Any, str]]) -> str:
+    """A small HTML table (quantity, value, unit) for notebooks."""
+    body = "".join(
+        f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
+        f"<td>{html.escape(_fmt(v))}</td><td>{html.escape(u)}</td></tr>"
+        for k, v, u in rows)
+    return (f"<table><caption>{html.escape(caption)}</caption>"
+            f"<tr><th>quantity</th><th>value</th><th>unit</th></tr>{body}</table>")
+
+
+class _Contract:
+    """The output methods shared by run results and analysis results.
+
+    A subclass implements :meth:`summary`, :meth:`to_dataset`, :meth:`figures` and
+    :attr:`flags`; :meth:`to_outputs` packs them as ``RunOutputs``.
+    """
+
+    @property
+    def flags(self) -> dict[str, tuple[str, ...]]:
+        """Every word each categorical summary entry can take (see ``RunOutputs.flags``)."""
+        return {}
+
+    def summary(self) -> dict:
+        """The ``summary.json`` dictionary, with its ``units`` map."""
+        raise NotImplementedError
+
+    def to_dataset(self) -> xr.Dataset:
+        """The result as an :class:`xarray.Dataset` (every variable has units)."""
+        raise NotImplementedError
+
+    def figures(self, dataset: xr.Dataset | None = None) -> dict[str, Any]:
+        """Figure name -> function returning a matplotlib Figure (drawn when called)."""
+        return {}
+
+    def to_outputs(self) -> RunOutputs:
+        """Summary, Dataset, figures and flags, as the command line writes them.
+
+        Returns
+        -------
+        RunOutputs
+        """
+        from slipcycle.io.results import RunOutputs
+
+        ds = self.to_dataset()
+        return RunOutputs(summary=self.summary(), dataset=ds, figures=self.figures(ds),
+                          flags=dict(self.flags))
+
+
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
-class RunResult:
+class RunResult(_Contract):
     """Base of every model's result: the shared vocabulary and the output methods.
 
     Subclasses (one per model: :class:`slipcycle.halfspace.outputs.HalfspaceResult`,
@@ -200,19 +257,6 @@ class RunResult:
         return {}
 
     # -- shared ----------------------------------------------------------------------------
-    def to_outputs(self) -> RunOutputs:
-        """Summary, Dataset, figures and flags, as ``slipcycle run`` writes them.
-
-        Returns
-        -------
-        RunOutputs
-        """
-        from slipcycle.io.results import RunOutputs
-
-        ds = self.to_dataset()
-        return RunOutputs(summary=self.summary(), dataset=ds, figures=self.figures(ds),
-                          flags=dict(self.flags))
-
     def _shared(self) -> list[tuple[str, Any, str]]:
         return [("steady_state", f"{self.steady_state.value} ({self.steady_state_detail})", ""),
                 ("dissipation_per_cycle", self.dissipation_per_cycle, self.dissipation_unit),
@@ -230,10 +274,56 @@ class RunResult:
                 f"converged={self.converged}>")
 
     def _repr_html_(self) -> str:
-        rows = "".join(
-            f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
-            f"<td>{html.escape(_fmt(v))}</td><td>{html.escape(u)}</td></tr>"
-            for k, v, u in self._shared())
-        return (f"<table><caption>{html.escape(type(self).__name__)} "
-                f"({html.escape(self.model)})</caption>"
-                f"<tr><th>quantity</th><th>value</th><th>unit</th></tr>{rows}</table>")
+        return _html_table(f"{type(self).__name__} ({self.model})", self._shared())
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class StudyResult(_Contract):
+    """Base of every analysis result (a study of many runs), with the output methods.
+
+    Subclasses (one per analysis: :class:`slipcycle.discrete.shakedown_study.ShakedownResult`,
+    :class:`slipcycle.discrete.basins.BasinsResult`,
+    :class:`slipcycle.halfspace.map_study.WHatMapResult`,
+    :class:`slipcycle.rods.limits.LimitsResult`) hold the analysis' numbers as fields and
+    implement :meth:`summary`, :meth:`to_dataset` (the one place the analysis' Dataset is
+    built), :meth:`figures` and :meth:`headline`; they set :attr:`model`,
+    :attr:`analysis` and :attr:`FLAGS`.
+
+    Attributes
+    ----------
+    wall_time_s : float
+        Wall-clock time of the analysis in the call that returned it [s].
+    """
+
+    #: the model of the analysed case
+    model: ClassVar[str] = ""
+    #: the ``analysis`` word of the summary
+    analysis: ClassVar[str] = ""
+    #: every word of the categorical summary entries (see ``RunOutputs.flags``)
+    FLAGS: ClassVar[dict[str, tuple[str, ...]]] = {}
+
+    wall_time_s: float
+
+    @property
+    def flags(self) -> dict[str, tuple[str, ...]]:
+        """Every word each categorical summary entry can take (see ``RunOutputs.flags``)."""
+        return dict(self.FLAGS)
+
+    def headline(self) -> list[tuple[str, Any, str]]:
+        """The numbers a user quotes first, as (name, value, unit) rows.
+
+        Returns
+        -------
+        list of tuple
+            ``(name, value, unit)``; shown by ``repr`` and the notebook table.
+        """
+        return [("wall_time_s", self.wall_time_s, "s")]
+
+    def __repr__(self) -> str:
+        parts = ", ".join(f"{k}={_fmt(v)}" + (f" {u}" if u not in ("", "1") else "")
+                          for k, v, u in self.headline())
+        return f"<{type(self).__name__} {self.model} {self.analysis}: {parts}>"
+
+    def _repr_html_(self) -> str:
+        return _html_table(f"{type(self).__name__} ({self.model} {self.analysis})",
+                           self.headline())

@@ -35,11 +35,11 @@ def add_parser(sub) -> None:
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.io import read_case, write_outputs
     from slipcycle.io.results import to_jsonable
-    from slipcycle.rods.limits import parse_limits, run_limits
+    from slipcycle.rods.limits import limits_study, parse_limits
 
     case = read_case(args.case, models=["rods"])
     lc = parse_limits(case, args.tolerance, maps=not args.no_maps)
-    out = run_limits(lc, maps=not args.no_maps, progress=True)
+    out = limits_study(lc, maps=not args.no_maps, progress=True).to_outputs()
     write_outputs(args.out, out, case.text, case.path)
     s = out.summary
     print(json.dumps(to_jsonable({k: s[k] for k in (

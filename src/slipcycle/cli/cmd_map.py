@@ -24,14 +24,14 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from slipcycle.halfspace.map_study import parse_map_case, w_hat_study
+    from slipcycle.halfspace.map_study import parse_map_case, w_hat_map_study
     from slipcycle.io import read_case, write_outputs
 
     case = read_case(args.case, models=["halfspace"])
     P1, Q1, ph, fig_P1, fig_Q1, settings = parse_map_case(case)
     print(f"computing W_hat on {P1.size} x {Q1.size} x {ph.size} = {P1.size * Q1.size * ph.size}"
           " points ...", flush=True)
-    outputs = w_hat_study(P1, Q1, ph, fig_P1, fig_Q1, settings)
+    outputs = w_hat_map_study(P1, Q1, ph, fig_P1, fig_Q1, settings).to_outputs()
     summary = outputs.summary
     write_outputs(args.out, outputs, case.text, case.path)
     print(json.dumps({k: summary[k] for k in ("grid_points", "wall_time_s", "cubic_law_slope",

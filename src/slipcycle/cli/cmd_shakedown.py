@@ -59,8 +59,9 @@ def execute(args: argparse.Namespace) -> int:
         print(f"stopped with {status.cells_done} of {status.cells_total} runs done; complete "
               "it with --resume", flush=True)
         return 0
-    write_outputs(args.out, status.outputs, case.text, case.path)
-    summary = status.outputs.summary
+    outputs = status.outputs  # status.result.to_outputs(), built once
+    write_outputs(args.out, outputs, case.text, case.path)
+    summary = outputs.summary
     print(json.dumps({k: summary[k] for k in ("lambda1", "lambda2", "lambda3_bracket",
                                               "lambda4_bracket", "regime")}, indent=2,
                      default=str))

@@ -26,8 +26,10 @@ from __future__ import annotations
 import functools
 import time
 import tomllib
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 import xarray as xr
@@ -45,16 +47,18 @@ from slipcycle.discrete.shakedown import (
 )
 from slipcycle.discrete.sizes import cells_bytes, check_memory
 from slipcycle.discrete.steady import STEADY_CODES, InadmissibleInitialState, simulate
-from slipcycle.io import Case, CaseError, RunOutputs
+from slipcycle.io import Case, CaseError
 from slipcycle.io.case import Section
 from slipcycle.plot.shakedown import basin_map
+from slipcycle.result import StudyResult
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
 __all__ = ["run_record", "run_records", "basin_row", "admissible_box",
            "box_counting_dimension", "class_code", "load_discrete_case",
            "basin_row_task", "lam_start_task", "protocol_task", "random_task",
-           "read_protocols", "parse_range", "basins_study", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
+           "read_protocols", "parse_range", "basins_study", "BasinsResult", "AnalysisStatus",
+           "SUMMARY_UNITS", "SUMMARY_FLAGS"]
 
 INADMISSIBLE = STEADY_CODES.index("inadmissible")
 
@@ -395,7 +399,7 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
                  protocols: Path | None = None, v1_range: str | None = None,
                  v2_range: str | None = None, lam: float | None = None, seed: int = 0,
                  workers: int | None = None, scheduler=None, resume: bool = False,
-                 progress: bool = True, stop_after: int | None = None) -> StudyStatus:
+                 progress: bool = True, stop_after: int | None = None) -> AnalysisStatus:
     """Steady state (class, dissipation per cycle) of a discrete case over initial conditions.
 
     At most one of ``grid``, ``random``, ``protocols`` (default: a 101 × 101 grid for
@@ -422,12 +426,14 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
 
     Returns
     -------
-    StudyStatus
-        ``outputs`` once every cell is done: ``summary`` (``mode``, ``lam``, ``lambda1``,
-        ``lambda2``, ``starts``, ``class_counts``, ``dissipation_per_cycle`` {min, max} [J],
-        ``both_outcomes``, ``steady_state_codes``, for a grid ``box_counting``; ``units``:
-        :data:`SUMMARY_UNITS`), ``dataset`` (class codes, dissipation, cycles run, slipping
-        nodes, memory erased, ``converged``) and, for a grid, the figure ``basin_map``.
+    AnalysisStatus
+        ``result`` (:class:`BasinsResult`) and ``outputs`` (``result.to_outputs()``) once
+        every cell is done, None while cells are missing: ``summary`` (``mode``, ``lam``,
+        ``lambda1``, ``lambda2``, ``starts``, ``class_counts``, ``dissipation_per_cycle``
+        {min, max} [J], ``both_outcomes``, ``steady_state_codes``, for a grid
+        ``box_counting``; ``units``: :data:`SUMMARY_UNITS`), ``dataset`` (class codes,
+        dissipation, cycles run, slipping nodes, memory erased, ``converged``) and, for a
+        grid, the figure ``basin_map``.
 
     Raises
     ------
@@ -509,57 +515,194 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
     wall = time.perf_counter() - t0
     done = store.done()
     if not done.all():
-        return StudyStatus(None, int(done.sum()), int(done.size))
+        return AnalysisStatus(None, int(done.sum()), int(done.size))
     data = store.read()
     region = safe_region(dc.system, dc.load)
     l2 = lambda2(region)[0]
     l1 = lambda1(region, l2)["lambda1"]
-    cls = data["steady_state"]
-    counts = {STEADY_CODES[c]: int((cls == c).sum()) for c in np.unique(cls)}
-    adm = cls != STEADY_CODES.index("inadmissible")
-    # reached a steady state (shakedown, cyclic slip or ratcheting) within run.cycles
-    converged = np.isin(cls, [STEADY_CODES.index(c) for c in
-                              ("shakedown", "cyclic_slip", "ratcheting")])
-    D = data["dissipation_per_cycle"]
-    summary = {"model": "discrete", "analysis": "basins", "mode": mode, "lam": lam,
-               "n_nodes": n, "lambda1": l1, "lambda2": l2, "starts": int(cls.size),
-               "class_counts": counts,
-               "dissipation_per_cycle": {"min": float(np.nanmin(D[adm])) if adm.any()
-                                         else None,
-                                         "max": float(np.nanmax(D[adm])) if adm.any()
-                                         else None},
-               "both_outcomes": bool((cls == 0).any() and (cls == 1).any()),
-               "steady_state_codes": list(STEADY_CODES), "wall_time_s": wall,
-               "units": dict(SUMMARY_UNITS)}
-    figures = {}
+    grid_kw = {}
     if mode == "grid":
         # boundaries between admissible starts only: the edge of the admissible region
         # is smooth and says nothing about the dynamics
-        bc = box_counting_dimension(cls, valid=adm)
-        summary["boundary_box_counting_dimension"] = bc["dimension"]
-        summary["box_counting"] = bc
-        summary["grid"] = [int(grid), int(grid)]
-        ds = xr.Dataset(
-            {"steady_state": (("v2", "v1"), cls, {"units": "1", "flag_values": list(range(
-                len(STEADY_CODES))), "flag_meanings": " ".join(STEADY_CODES)}),
-             "dissipation_per_cycle": (("v2", "v1"), D, {"units": "J"}),
-             "dissipation_per_node": (("v2", "v1", "node"), data["dissipation_per_node"],
-                                      {"units": "J"}),
-             "cycles_run": (("v2", "v1"), data["cycles_run"], {"units": "1"}),
-             "n_slipping": (("v2", "v1"), data["n_slipping"], {"units": "1"}),
-             "memory_erased": (("v2", "v1"), data["memory_erased"], {"units": "1"}),
-             "converged": (("v2", "v1"), converged, CONVERGED_ATTRS)},
-            coords={"v1": ("v1", v1, {"units": "m", "long_name": "initial slip of node 0"}),
-                    "v2": ("v2", v2, {"units": "m", "long_name": "initial slip of node 1"})})
-        figures["basin_map"] = lambda: basin_map(v1, v2, cls, D, region, lam)
-    else:
+        cls = data["steady_state"]
+        grid_kw = {"v1": v1, "v2": v2, "region": region, "box_counting": box_counting_dimension(
+            cls, valid=cls != INADMISSIBLE)}
+    result = BasinsResult(wall_time_s=wall, mode=mode, lam=lam, n_nodes=n, lambda1=l1,
+                          lambda2=l2, data=data, store=None if mode == "grid" else store,
+                          axes=tuple(axes), **grid_kw)
+    return AnalysisStatus(result.to_outputs(), int(done.size), int(done.size), result)
+
+
+@dataclass(frozen=True)
+class AnalysisStatus(StudyStatus):
+    """:class:`~slipcycle.sweep.dataset.StudyStatus` of a resumable analysis, with its result.
+
+    Attributes
+    ----------
+    outputs : RunOutputs or None
+        ``result.to_outputs()`` once every cell is done; None while cells are missing.
+    cells_done, cells_total : int
+        Computed cells of the store, and all of them.
+    result : StudyResult or None
+        The analysis result once every cell is done (:class:`BasinsResult`,
+        :class:`~slipcycle.discrete.shakedown_study.ShakedownResult`).
+    """
+
+    result: StudyResult | None = None
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class BasinsResult(StudyResult):
+    """Steady state of a discrete case over initial conditions (``slipcycle basins``).
+
+    Attributes
+    ----------
+    wall_time_s : float
+        Wall time of the runs in this call [s].
+    mode : str
+        ``grid``, ``random`` or ``protocols``.
+    lam : float
+        Load factor λ of the runs [1].
+    n_nodes : int
+        Nodes N of the system.
+    lambda1, lambda2 : float
+        Shakedown load factors of the case's own load (Barber 2012) [1].
+    data : dict of str to ndarray
+        The stored outputs over the starts: ``steady_state`` (class codes of
+        :data:`~slipcycle.discrete.steady.STEADY_CODES`), ``dissipation_per_cycle`` [J],
+        ``dissipation_per_node`` [J] (last axis: node), ``cycles_run``, ``n_slipping``,
+        ``memory_erased``; shape (v2, v1) for a grid, (start,) otherwise.
+    store : SweepStore or None
+        For random starts and protocols, the store the runs were kept in (its Dataset is
+        read from it, with the task's own attributes).
+    axes : tuple of Axis
+        The sweep axes of ``store``.
+    v1, v2 : ndarray or None
+        Grid of initial slips of nodes 0 and 1 [m] (grid only).
+    region : SafeRegion or None
+        The safe shakedown region (grid only, for the basin map).
+    box_counting : dict or None
+        :func:`box_counting_dimension` of the class boundaries (grid only).
+    """
+
+    model: ClassVar[str] = "discrete"
+    analysis: ClassVar[str] = "basins"
+    FLAGS: ClassVar[dict] = SUMMARY_FLAGS
+
+    mode: str
+    lam: float
+    n_nodes: int
+    lambda1: float
+    lambda2: float
+    data: dict
+    store: object = None
+    axes: tuple = ()
+    v1: np.ndarray | None = None
+    v2: np.ndarray | None = None
+    region: object = None
+    box_counting: dict | None = None
+
+    @property
+    def steady_state(self) -> np.ndarray:
+        """Class codes over the starts (:data:`~slipcycle.discrete.steady.STEADY_CODES`)."""
+        return self.data["steady_state"]
+
+    @property
+    def class_counts(self) -> dict[str, int]:
+        """Number of starts per steady-state class."""
+        cls = self.steady_state
+        return {STEADY_CODES[c]: int((cls == c).sum()) for c in np.unique(cls)}
+
+    def headline(self) -> list[tuple]:
+        """Mode, λ, starts, class counts, whether both outcomes occur, λ1, λ2."""
+        return [("mode", self.mode, ""), ("lam", self.lam, "1"),
+                ("starts", int(self.steady_state.size), "1"),
+                ("class_counts", self.class_counts, "1"),
+                ("both_outcomes", self.summary()["both_outcomes"], ""),
+                ("lambda1", self.lambda1, "1"), ("lambda2", self.lambda2, "1"),
+                ("wall_time_s", self.wall_time_s, "s")]
+
+    def summary(self) -> dict:
+        """``summary.json`` of ``slipcycle basins`` (units: :data:`SUMMARY_UNITS`).
+
+        Returns
+        -------
+        dict
+            ``mode``, ``lam``, ``lambda1``, ``lambda2``, ``starts``, ``class_counts``,
+            ``dissipation_per_cycle`` {min, max} [J] over admissible starts,
+            ``both_outcomes``, ``steady_state_codes``, ``wall_time_s`` [s], for a grid
+            ``boundary_box_counting_dimension``, ``box_counting`` and ``grid``; ``units``.
+        """
+        cls = self.steady_state
+        adm = cls != INADMISSIBLE
+        D = self.data["dissipation_per_cycle"]
+        summary = {"model": "discrete", "analysis": "basins", "mode": self.mode,
+                   "lam": self.lam, "n_nodes": self.n_nodes, "lambda1": self.lambda1,
+                   "lambda2": self.lambda2, "starts": int(cls.size),
+                   "class_counts": self.class_counts,
+                   "dissipation_per_cycle": {
+                       "min": float(np.nanmin(D[adm])) if adm.any() else None,
+                       "max": float(np.nanmax(D[adm])) if adm.any() else None},
+                   "both_outcomes": bool((cls == 0).any() and (cls == 1).any()),
+                   "steady_state_codes": list(STEADY_CODES), "wall_time_s": self.wall_time_s,
+                   "units": dict(SUMMARY_UNITS)}
+        if self.mode == "grid":
+            summary["boundary_box_counting_dimension"] = self.box_counting["dimension"]
+            summary["box_counting"] = self.box_counting
+            summary["grid"] = [int(self.v1.size), int(self.v2.size)]
+        return summary
+
+    def to_dataset(self) -> xr.Dataset:
+        """Class codes, dissipation [J], cycles run, slipping nodes, memory erased and
+        ``converged`` over the starts ((v2, v1) [m] for a grid, else the sweep axis).
+
+        The only place the Dataset of a basins study is built.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        cls = self.steady_state
+        # reached a steady state (shakedown, cyclic slip or ratcheting) within run.cycles
+        converged = np.isin(cls, [STEADY_CODES.index(c) for c in
+                                  ("shakedown", "cyclic_slip", "ratcheting")])
         codes = list(range(len(STEADY_CODES)))
-        ds = store_dataset(store, axes, attrs={
-            "steady_state": {"units": "1", "flag_values": codes,
-                             "flag_meanings": " ".join(STEADY_CODES)},
-            "dissipation_per_cycle": {"units": "J"}, "dissipation_per_node": {"units": "J"},
-            "cycles_run": {"units": "1"}, "n_slipping": {"units": "1"},
-            "memory_erased": {"units": "1"}})
-        ds["converged"] = (tuple(ds["steady_state"].dims), converged, CONVERGED_ATTRS)
-    outputs = RunOutputs(summary=summary, dataset=ds, figures=figures, flags=dict(SUMMARY_FLAGS))
-    return StudyStatus(outputs, int(done.size), int(done.size))
+        if self.mode != "grid":
+            ds = store_dataset(self.store, self.axes, attrs={
+                "steady_state": {"units": "1", "flag_values": codes,
+                                 "flag_meanings": " ".join(STEADY_CODES)},
+                "dissipation_per_cycle": {"units": "J"},
+                "dissipation_per_node": {"units": "J"},
+                "cycles_run": {"units": "1"}, "n_slipping": {"units": "1"},
+                "memory_erased": {"units": "1"}})
+            ds["converged"] = (tuple(ds["steady_state"].dims), converged, CONVERGED_ATTRS)
+            return ds
+        d, g = self.data, ("v2", "v1")
+        return xr.Dataset(
+            {"steady_state": (g, cls, {"units": "1", "flag_values": codes,
+                                       "flag_meanings": " ".join(STEADY_CODES)}),
+             "dissipation_per_cycle": (g, d["dissipation_per_cycle"], {"units": "J"}),
+             "dissipation_per_node": (g + ("node",), d["dissipation_per_node"],
+                                      {"units": "J"}),
+             "cycles_run": (g, d["cycles_run"], {"units": "1"}),
+             "n_slipping": (g, d["n_slipping"], {"units": "1"}),
+             "memory_erased": (g, d["memory_erased"], {"units": "1"}),
+             "converged": (g, converged, CONVERGED_ATTRS)},
+            coords={"v1": ("v1", self.v1, {"units": "m",
+                                           "long_name": "initial slip of node 0"}),
+                    "v2": ("v2", self.v2, {"units": "m",
+                                           "long_name": "initial slip of node 1"})})
+
+    def figures(self, dataset: xr.Dataset | None = None) -> dict:
+        """``basin_map`` (grid only): classes and dissipation over (v1, v2) with the safe
+        region.
+
+        Returns
+        -------
+        dict of str to callable
+        """
+        if self.mode != "grid":
+            return {}
+        return {"basin_map": lambda: basin_map(self.v1, self.v2, self.steady_state,
+                                               self.data["dissipation_per_cycle"],
+                                               self.region, self.lam)}

@@ -182,6 +182,24 @@ def _initial_state_error(sec: Section, ld: Section, exc, r0: np.ndarray, n: int)
     return sec.error("initial_slip", f"inadmissible at θ = 0: {exc}")
 
 
+#: fields of :class:`FrictionalSystem` that are keys of ``[discrete]`` of the same name
+_SYSTEM_KEYS = ("A", "B", "C", "friction", "accept_ill_posed", "f_crit_exact_max_nodes")
+
+
+def _case_error(exc: ModelError, keys: Mapping[str, str]) -> CaseError:
+    """The model's error under the case-file key of its field (``keys``: field → key).
+
+    A remedy that names another field (``accept_ill_posed=True``) is said with its key
+    and TOML value (``discrete.accept_ill_posed = true``).
+    """
+    problem = exc.problem
+    if exc.remedy is not None:
+        field, value, purpose = exc.remedy
+        toml_value = str(value).lower() if isinstance(value, bool) else repr(value)
+        problem = f"{exc.detail}. Set {keys.get(field, field)} = {toml_value} to {purpose}"
+    return CaseError(keys.get(exc.name, exc.name), problem)
+
+
 def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     """Read and validate every key of a discrete case; no computation beyond checks.
 
@@ -199,9 +217,9 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     n = np.asarray(mats["A"]).shape[0] if np.ndim(mats["A"]) == 2 else 0
     if sec.has("stiffness_file"):
         _check_file_nodes(case, sec, n)
-    friction = sec.array("friction", shape=(n,), ge=0.0, scalar_ok=True)
+    friction = sec.array("friction", shape=(n,), scalar_ok=True)
     accept = sec.bool("accept_ill_posed", False)
-    exact_max = sec.int("f_crit_exact_max_nodes", 10, ge=0, le=14)
+    exact_max = sec.int("f_crit_exact_max_nodes", 10)
     init = sec.array("initial_slip", None, shape=(n,))
     proto_secs = sec.tables("protocol", None)
     if init is not None and proto_secs:
@@ -263,21 +281,13 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
                  f"{steps:g} steps per cycle × up to {cyc:g} cycles "
                  f"({n} nodes{', every cycle recorded' if record else ''})")
 
-    # -- model checks (no solving yet) ---------------------------------------------------
+    # -- model checks (no solving yet): the model's own, under the keys of the case ------
     try:
-        system = FrictionalSystem(mats["A"], mats["B"], mats["C"], friction)
+        system = FrictionalSystem(mats["A"], mats["B"], mats["C"], friction,
+                                  accept_ill_posed=accept, f_crit_exact_max_nodes=exact_max)
     except ModelError as exc:
-        key = mkeys.get(exc.name, sec.key(exc.name))
-        raise CaseError(key, exc.problem) from None
-    fc = critical_friction(system.A, system.B, system.friction, exact_max_nodes=exact_max)
-    fmax = float(np.max(system.friction))
-    if fmax >= fc.f_crit and not accept:
-        raise CaseError(sec.key("friction"),
-                        f"f = {fmax:g} is not below the critical friction coefficient "
-                        f"f_crit = {fc.f_crit:.6g} ({fc.method}; nodes {list(fc.nodes)}, slip "
-                        f"signs {list(fc.signs)}): the rate problem is ill posed (Klarbring "
-                        "P-matrix condition). Set discrete.accept_ill_posed = true to run "
-                        "anyway")
+        raise _case_error(exc, {**{k: sec.key(k) for k in _SYSTEM_KEYS}, **mkeys}) from None
+    fc = system.critical_friction
     if init is not None:
         r0 = load(np.array([0.0]))[0]
         F = max(float(np.max(np.abs(load.cycle_samples(run["steps_per_cycle"])[1]))), 1e-300)
@@ -436,8 +446,9 @@ def discrete_case(system: FrictionalSystem, load, run: Mapping | None = None, *,
         if key not in RUN_DEFAULTS:
             raise TypeError(f"unknown run setting {key!r} (known: {', '.join(RUN_DEFAULTS)})")
         settings[key] = value
-    fc = critical_friction(system.A, system.B, system.friction,
-                           exact_max_nodes=f_crit_exact_max_nodes)
+    fc = system.critical_friction if f_crit_exact_max_nodes == \
+        system.f_crit_exact_max_nodes else critical_friction(
+            system.A, system.B, system.friction, exact_max_nodes=f_crit_exact_max_nodes)
     return DiscreteCase(system, load, fc, settings,
                         None if initial_slip is None else np.asarray(initial_slip, float),
                         None if protocol is None else np.asarray(protocol, float))

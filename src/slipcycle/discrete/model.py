@@ -17,6 +17,7 @@ Vectors of the state and of the reactions are stored with the tangential part fi
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -29,6 +30,9 @@ __all__ = ["FrictionalSystem", "ModelError", "STICK", "SLIP_POS", "SLIP_NEG", "S
 STICK, SLIP_POS, SLIP_NEG, SEPARATED = 0, 1, 2, 3
 STATE_NAMES = ("stick", "slip_positive", "slip_negative", "separated")
 
+#: largest ``f_crit_exact_max_nodes``: the exact enumeration visits (3^N − 1)/2 pairs
+_EXACT_MAX_NODES = 14
+
 
 class ModelError(InputError):
     """An invalid model.
@@ -39,9 +43,19 @@ class ModelError(InputError):
         The matrix or parameter at fault (``"A"``, ``"friction"``); also ``key``.
     problem : str
         What is wrong, in words.
+    remedy : (str, bool, str), optional
+        ``(field, value, purpose)``: setting another field would let the model through
+        (``accept_ill_posed``, ``True``, ``"run anyway"``). ``problem`` then ends with
+        ``Pass field=value to purpose``; :attr:`detail` is ``problem`` without it, so that
+        a case-file reader can name its own key instead.
     """
 
-    def __init__(self, name: str, problem: str):
+    def __init__(self, name: str, problem: str, *, remedy: tuple | None = None):
+        self.detail = problem
+        self.remedy = remedy
+        if remedy is not None:
+            field_name, value, purpose = remedy
+            problem = f"{problem}. Pass {field_name}={value!r} to {purpose}"
         super().__init__(name, problem)
         self.name = name
 
@@ -88,25 +102,25 @@ class FrictionalSystem:
         Normal stiffness [N/m], symmetric positive definite.
     friction : float or (N,) array_like
         Coulomb coefficient f ≥ 0 of each node.
-    accept_ill_posed : bool or None, optional
-        ``False``: refuse f ≥ f_crit, the critical friction coefficient below which the
-        rate problem has a unique solution (A. Klarbring, "Examples of non-uniqueness and
-        non-existence of solutions to quasistatic contact problems with friction",
-        Ing.-Arch. 60 (1990) 529–541; P-matrix condition, see
+    accept_ill_posed : bool, optional
+        ``False`` (default): refuse f ≥ f_crit, the critical friction coefficient below
+        which the rate problem has a unique solution (A. Klarbring, "Examples of
+        non-uniqueness and non-existence of solutions to quasistatic contact problems with
+        friction", Ing.-Arch. 60 (1990) 529–541; P-matrix condition, see
         :func:`~slipcycle.discrete.wellposed.critical_friction`). ``True``: accept it
-        (the solvers may then stop with :class:`~slipcycle.errors.SolverError`).
-        ``None`` (default, for compatibility): not checked here; the case-file reader and
-        ``slipcycle run`` check it, Python callers should pass ``False``.
+        (the solvers may then stop with :class:`~slipcycle.errors.SolverError`); the
+        case-file key ``discrete.accept_ill_posed = true`` passes it.
     f_crit_exact_max_nodes : int, optional
-        Largest N for which f_crit is computed exactly (else a lower bound is used);
-        only with ``accept_ill_posed=False``.
+        Largest N for which f_crit is computed exactly (else a bound is used), 0 to 14
+        (the exact enumeration visits (3^N − 1)/2 subset/sign pairs). Default 10.
 
     Raises
     ------
     ModelError
         Naming the matrix and the failed property (shape, finiteness, symmetry, positive
-        definiteness of A, C or of the whole K = [[A, Bᵀ], [B, C]], f < 0, and with
-        ``accept_ill_posed=False`` f ≥ f_crit, keyed ``friction``).
+        definiteness of A, C or of the whole K = [[A, Bᵀ], [B, C]], f < 0, and unless
+        ``accept_ill_posed=True`` f ≥ f_crit, keyed ``friction``), or the value of
+        ``accept_ill_posed`` or ``f_crit_exact_max_nodes``.
     """
 
     A: np.ndarray
@@ -114,7 +128,7 @@ class FrictionalSystem:
     C: np.ndarray
     friction: np.ndarray
     K: np.ndarray = field(init=False, repr=False, compare=False)
-    accept_ill_posed: bool | None = field(default=None, compare=False)
+    accept_ill_posed: bool = field(default=False, compare=False)
     f_crit_exact_max_nodes: int = field(default=10, compare=False, repr=False)
 
     def __post_init__(self):
@@ -153,25 +167,39 @@ class FrictionalSystem:
             val = np.array(val, dtype=float)
             val.setflags(write=False)
             object.__setattr__(self, name, val)
-        if self.accept_ill_posed not in (None, True, False):
-            raise ModelError("accept_ill_posed", "must be True, False or None")
-        if self.accept_ill_posed is False:
+        if not isinstance(self.accept_ill_posed, (bool, np.bool_)):
+            raise ModelError("accept_ill_posed", "must be True or False, got "
+                                                 f"{self.accept_ill_posed!r}")
+        exact = self.f_crit_exact_max_nodes
+        if isinstance(exact, (bool, np.bool_)) or not isinstance(exact, (int, np.integer)):
+            raise ModelError("f_crit_exact_max_nodes", f"must be an integer, got {exact!r}")
+        for bad, bound in ((exact < 0, ">= 0"), (exact > _EXACT_MAX_NODES,
+                                                  f"<= {_EXACT_MAX_NODES}")):
+            if bad:
+                raise ModelError("f_crit_exact_max_nodes", f"must be {bound}, got {exact}")
+        if not self.accept_ill_posed:
             self._check_well_posed()
 
-    def _check_well_posed(self) -> None:
+    @cached_property
+    def critical_friction(self):
+        """Klarbring's critical friction coefficient of this system, with the friction
+        ratios of its nodes (a :class:`~slipcycle.discrete.wellposed.CriticalFriction`;
+        exact up to ``f_crit_exact_max_nodes`` nodes)."""
         from slipcycle.discrete.wellposed import critical_friction
 
-        fc = critical_friction(self.A, self.B, self.friction,
-                               exact_max_nodes=self.f_crit_exact_max_nodes)
+        return critical_friction(self.A, self.B, self.friction,
+                                 exact_max_nodes=self.f_crit_exact_max_nodes)
+
+    def _check_well_posed(self) -> None:
+        fc = self.critical_friction
         fmax = float(np.max(self.friction))
         if fmax >= fc.f_crit:
-            # the message of the case-file reader (discrete.friction)
             raise ModelError("friction",
                              f"f = {fmax:g} is not below the critical friction coefficient "
                              f"f_crit = {fc.f_crit:.6g} ({fc.method}; nodes {list(fc.nodes)}, "
                              f"slip signs {list(fc.signs)}): the rate problem is ill posed "
-                             "(Klarbring P-matrix condition). Pass accept_ill_posed=True to "
-                             "run anyway")
+                             "(Klarbring P-matrix condition)",
+                             remedy=("accept_ill_posed", True, "run anyway"))
 
     @property
     def n_nodes(self) -> int:

@@ -21,13 +21,20 @@ import os
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 import xarray as xr
 
-from slipcycle.discrete.basins import lam_start_task, load_discrete_case, run_record
+from slipcycle.discrete.basins import (
+    AnalysisStatus,
+    lam_start_task,
+    load_discrete_case,
+    run_record,
+)
 from slipcycle.discrete.shakedown import (
     constraint_names,
     lambda1,
@@ -40,13 +47,15 @@ from slipcycle.discrete.shakedown import (
 )
 from slipcycle.discrete.sizes import cells_bytes, check_memory
 from slipcycle.discrete.steady import STEADY_CODES, simulate
-from slipcycle.io import Case, CaseError, RunOutputs
+from slipcycle.io import Case, CaseError
 from slipcycle.plot import shakedown as plots
+from slipcycle.result import StudyResult
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.core import TaskRunner, fingerprint
-from slipcycle.sweep.dataset import StudyStatus, as_case_error
+from slipcycle.sweep.dataset import as_case_error
 
-__all__ = ["shakedown_study", "check_sizes", "TrialRuns", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
+__all__ = ["shakedown_study", "ShakedownResult", "check_sizes", "TrialRuns", "SUMMARY_UNITS",
+           "SUMMARY_FLAGS"]
 
 #: unit of every numeric summary entry (λ values are load factors: "1"; nested entries
 #: by their path)
@@ -106,7 +115,7 @@ def _panels(dc, region, l1, l2, lam_case, seed):
 def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points: int = 21,
                     starts: int = 8, seed: int = 0, tol: float = 1e-9, lam_tol: float = 1e-3,
                     workers: int | None = None, scheduler=None, resume: bool = False,
-                    progress: bool = True, stop_after: int | None = None) -> StudyStatus:
+                    progress: bool = True, stop_after: int | None = None) -> AnalysisStatus:
     """Safe region, λ1, λ2 and refined λ3/λ4 brackets of a discrete case.
 
     Parameters
@@ -134,8 +143,9 @@ def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points
 
     Returns
     -------
-    StudyStatus
-        ``outputs`` once the scan is complete: ``summary`` (``lambda1``, ``lambda2``,
+    AnalysisStatus
+        ``result`` (:class:`ShakedownResult`) and ``outputs`` (``result.to_outputs()``)
+        once the scan is complete: ``summary`` (``lambda1``, ``lambda2``,
         ``lambda3_bracket``, ``lambda4_bracket`` refined, the grid brackets, the extreme
         constraints, the evidence runs, ``refinement``, ``scan``, the case's own run,
         ``units``: :data:`SUMMARY_UNITS`), ``dataset`` (classes and dissipation over
@@ -193,7 +203,7 @@ def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points
             raise as_case_error(exc) from None
         done = store.done()
         if not done.all():
-            return StudyStatus(None, int(done.sum()), int(done.size))
+            return AnalysisStatus(None, int(done.sum()), int(done.size))
         data = store.read()
         cls = data["steady_state"]
         recs = []
@@ -216,79 +226,230 @@ def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points
     regime = ("below_lambda1" if lam_case < l1 else
               "between_lambda1_and_lambda2" if lam_case <= l2 else "above_lambda2")
     names = constraint_names(n)
-    summary = {
-        "model": "discrete", "analysis": "shakedown", "n_nodes": n,
-        "lambda1": l1, "lambda1_bracket": list(l1info["bracket"]), "lambda2": l2,
-        "lambda3_bracket": list(ref.brackets["lambda3"]),
-        "lambda4_bracket": list(ref.brackets["lambda4"]),
-        "lambda3_grid_bracket": list(br.lambda3_bracket),
-        "lambda4_grid_bracket": list(br.lambda4_bracket),
-        "redundant_above_lambda1": [names[k] for k in l1info["redundant_above"]],
-        "extreme_method": region.method,
-        "constraints": {"names": names, "G": region.G, "h0": region.h0, "m": region.m,
-                        "theta_extreme": region.theta_extreme},
-        "last_safe_state": v_last,
-        "lam": lam_case, "regime": regime,
-        "steady_state": STEADY_CODES[int(own["steady_state"])],
-        "dissipation_per_cycle": float(own["dissipation_per_cycle"]),
-        "lambda3_evidence": ref.evidence["lambda3"],
-        "lambda4_evidence": ref.evidence["lambda4"],
-        "refinement_runs": ref.runs,
-        "refinement": {
+    result = ShakedownResult(
+        wall_time_s=time.perf_counter() - t0, n_nodes=n, lambda1=l1,
+        lambda1_bracket=tuple(l1info["bracket"]), lambda2=l2,
+        lambda3_bracket=tuple(ref.brackets["lambda3"]),
+        lambda4_bracket=tuple(ref.brackets["lambda4"]),
+        lambda3_grid_bracket=tuple(br.lambda3_bracket),
+        lambda4_grid_bracket=tuple(br.lambda4_bracket),
+        redundant_above_lambda1=tuple(names[k] for k in l1info["redundant_above"]),
+        region=region, last_safe_state=v_last, lam=lam_case, regime=regime,
+        steady_state=STEADY_CODES[int(own["steady_state"])],
+        dissipation_per_cycle=float(own["dissipation_per_cycle"]),
+        evidence=dict(ref.evidence),
+        refinement={
             "lam_tol": lam_tol_abs, "lam_tol_relative": lam_tol,
             "method": "bisection in λ from the grid brackets, every start at every trial "
                       "λ; assumes the criterion is monotone in λ above the bracket",
             "trial_lam": trial_lams, "runs": ref.runs, "runs_computed": trials.computed,
             "steps": {k: [[lam, ok] for lam, ok in v] for k, v in ref.steps.items()},
             "checkpoint": str(ckpt)},
-        "scan": {"lam": list(lams), "starts": starts + 1, "seed": seed,
-                 "store": str(out / "scan.zarr"),
-                 "class_counts": {STEADY_CODES[c]: int((cls == c).sum())
-                                  for c in np.unique(cls)}},
-        "linear_programs": l1info["lps"] + 1, "lp_wall_time_s": t_lp,
-        "units": dict(SUMMARY_UNITS),
-    }
-    if n == 2:
-        summary["safe_region_vertices"] = polygon_vertices(region, lam_case)
-    ds = xr.Dataset(
-        {"steady_state": (("lam", "start"), cls, {"units": "1",
-                                                  "flag_meanings": " ".join(STEADY_CODES)}),
-         "dissipation_per_cycle": (("lam", "start"), data["dissipation_per_cycle"],
-                                   {"units": "J"}),
-         "dissipation_per_node": (("lam", "start", "node"), data["dissipation_per_node"],
-                                  {"units": "J"}),
-         "n_slipping": (("lam", "start"), data["n_slipping"], {"units": "1"}),
-         "memory_erased": (("lam", "start"), data["memory_erased"], {"units": "1"}),
-         "initial_slip": (("lam", "start", "node"), data["initial_slip"], {"units": "m"}),
-         "G": (("constraint", "node"), region.G, {"units": "N/m"}),
-         "h0": (("constraint",), region.h0, {"units": "N"}),
-         "m": (("constraint",), region.m, {"units": "N"}),
-         "theta_extreme": (("constraint",), region.theta_extreme, {"units": "rad"})},
-        coords={"lam": ("lam", np.array(lams), {"units": "1"}),
-                "start": ("start", np.arange(starts + 1), {"units": "1"})})
-    ds.attrs.update({"lambda1": l1, "lambda2": l2 if np.isfinite(l2) else -1.0})
-    trial = trials.arrays(trial_lams, n)
-    if trial_lams:
-        tdims = ("trial_lam", "start")
-        ds = ds.assign_coords(trial_lam=("trial_lam", np.array(trial_lams), {"units": "1"}))
-        ds["trial_steady_state"] = (tdims, trial["steady_state"], {
-            "units": "1", "flag_meanings": " ".join(STEADY_CODES)})
-        ds["trial_dissipation_per_cycle"] = (tdims, trial["dissipation_per_cycle"],
-                                             {"units": "J"})
-        ds["trial_n_slipping"] = (tdims, trial["n_slipping"], {"units": "1"})
-        ds["trial_memory_erased"] = (tdims, trial["memory_erased"], {"units": "1"})
-        ds["trial_initial_slip"] = (tdims + ("node",), trial["initial_slip"], {"units": "m"})
-    figures = {"dissipation_vs_lambda": lambda: plots.dissipation_vs_lambda(
-        np.array(lams), data["dissipation_per_cycle"], cls, l1, l2, br.lambda3_bracket,
-        br.lambda4_bracket, refined=ref.brackets,
-        trials=(np.array(trial_lams), trial["dissipation_per_cycle"],
-                trial["steady_state"]) if trial_lams else None)}
-    if n == 2 and np.isfinite(l2):
-        figures["safe_region_panels"] = lambda: plots.safe_region_panels(
-            region, _panels(dc, region, l1, l2, lam_case, seed), l1, l2)
-    outputs = RunOutputs(summary=summary, dataset=ds, figures=figures,
-                         flags=dict(SUMMARY_FLAGS))
-    return StudyStatus(outputs, int(done.size), int(done.size))
+        scan_lam=np.array(lams), seed=seed, scan_store=str(out / "scan.zarr"), scan=data,
+        trial_lam=np.array(trial_lams), trials=trials.arrays(trial_lams, n),
+        linear_programs=l1info["lps"] + 1, lp_wall_time_s=t_lp, discrete_case=dc)
+    return AnalysisStatus(result.to_outputs(), int(done.size), int(done.size), result)
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class ShakedownResult(StudyResult):
+    """Safe region, λ1…λ4 and the λ scan of a discrete case (``slipcycle shakedown``).
+
+    Load factors λ are dimensionless [1] (the load is λ times the case's load).
+
+    Attributes
+    ----------
+    wall_time_s : float
+        Wall time of the study in this call (linear programs, scan, bisection) [s].
+    n_nodes : int
+        Nodes N of the system.
+    lambda1 : float
+        Largest λ with every one of the 2N constraints active (Klarbring, Ciavarella &
+        Barber 2007) [1]; ``lambda1_bracket`` (lo, hi) of its bisection.
+    lambda2 : float
+        Largest λ with a non-empty safe region S(λ) (Barber 2012) [1]; inf when unbounded.
+    lambda3_bracket, lambda4_bracket : (float, float or None)
+        Refined brackets of λ3 (every node slips in every steady cycle) and λ4 (all nodes
+        slip or separate at one instant) [1]; hi None when not reached.
+    lambda3_grid_bracket, lambda4_grid_bracket : (float, float or None)
+        The same brackets on the scan grid [1].
+    redundant_above_lambda1 : tuple of str
+        Constraints that become redundant just above λ1.
+    region : SafeRegion
+        Extreme constraints G [N/m], h0 [N], m [N], θ extreme [rad] and their method.
+    last_safe_state : ndarray, shape (N,)
+        The slip state [m] left in S(λ2).
+    lam : float
+        The case's own λ [1]; ``regime`` says where it lies against λ1 and λ2.
+    steady_state : str
+        Class of the case's own run; ``dissipation_per_cycle`` its dissipation [J].
+    evidence : dict
+        ``"lambda3"``/``"lambda4"`` → the runs at the final lo and hi of each bracket.
+    refinement : dict
+        The bisection: ``lam_tol`` [1], ``lam_tol_relative``, ``trial_lam``, ``runs``,
+        ``runs_computed``, ``steps``, ``checkpoint`` path.
+    scan_lam : ndarray, shape (L,)
+        λ values of the scan [1]; ``seed`` of its random starts; ``scan_store`` its path.
+    scan : dict of str to ndarray
+        Stored scan outputs over (lam, start): ``steady_state`` codes
+        (:data:`~slipcycle.discrete.steady.STEADY_CODES`), ``dissipation_per_cycle`` [J],
+        ``dissipation_per_node`` [J] (last axis node), ``n_slipping``, ``memory_erased``,
+        ``initial_slip`` [m].
+    trial_lam : ndarray, shape (T,)
+        Trial λ values of the bisection [1]; ``trials`` their runs over (trial_lam, start)
+        (same keys as ``scan``).
+    linear_programs : int
+        Linear programs solved; ``lp_wall_time_s`` their time [s].
+    discrete_case : DiscreteCase
+        The validated case (for the trajectory panels).
+    """
+
+    model: ClassVar[str] = "discrete"
+    analysis: ClassVar[str] = "shakedown"
+    FLAGS: ClassVar[dict] = SUMMARY_FLAGS
+
+    n_nodes: int
+    lambda1: float
+    lambda1_bracket: tuple
+    lambda2: float
+    lambda3_bracket: tuple
+    lambda4_bracket: tuple
+    lambda3_grid_bracket: tuple
+    lambda4_grid_bracket: tuple
+    redundant_above_lambda1: tuple
+    region: object
+    last_safe_state: np.ndarray
+    lam: float
+    regime: str
+    steady_state: str
+    dissipation_per_cycle: float
+    evidence: dict
+    refinement: dict
+    scan_lam: np.ndarray
+    seed: int
+    scan_store: str
+    scan: dict
+    trial_lam: np.ndarray
+    trials: dict
+    linear_programs: int
+    lp_wall_time_s: float
+    discrete_case: object
+
+    def headline(self) -> list[tuple]:
+        """λ1, λ2, the refined λ3/λ4 brackets, the case's λ and its regime."""
+        return [("lambda1", self.lambda1, "1"), ("lambda2", self.lambda2, "1"),
+                ("lambda3_bracket", self.lambda3_bracket, "1"),
+                ("lambda4_bracket", self.lambda4_bracket, "1"), ("lam", self.lam, "1"),
+                ("regime", self.regime, ""), ("steady_state", self.steady_state, ""),
+                ("wall_time_s", self.wall_time_s, "s")]
+
+    def summary(self) -> dict:
+        """``summary.json`` of ``slipcycle shakedown`` (units: :data:`SUMMARY_UNITS`).
+
+        Returns
+        -------
+        dict
+            ``lambda1``, ``lambda2``, ``lambda3_bracket``, ``lambda4_bracket`` (refined),
+            the grid brackets, the extreme constraints, the evidence runs,
+            ``refinement``, ``scan``, the case's own run, for N = 2
+            ``safe_region_vertices`` [m]; ``units``.
+        """
+        region, cls = self.region, self.scan["steady_state"]
+        summary = {
+            "model": "discrete", "analysis": "shakedown", "n_nodes": self.n_nodes,
+            "lambda1": self.lambda1, "lambda1_bracket": list(self.lambda1_bracket),
+            "lambda2": self.lambda2,
+            "lambda3_bracket": list(self.lambda3_bracket),
+            "lambda4_bracket": list(self.lambda4_bracket),
+            "lambda3_grid_bracket": list(self.lambda3_grid_bracket),
+            "lambda4_grid_bracket": list(self.lambda4_grid_bracket),
+            "redundant_above_lambda1": list(self.redundant_above_lambda1),
+            "extreme_method": region.method,
+            "constraints": {"names": constraint_names(self.n_nodes), "G": region.G,
+                            "h0": region.h0, "m": region.m,
+                            "theta_extreme": region.theta_extreme},
+            "last_safe_state": self.last_safe_state,
+            "lam": self.lam, "regime": self.regime,
+            "steady_state": self.steady_state,
+            "dissipation_per_cycle": self.dissipation_per_cycle,
+            "lambda3_evidence": self.evidence["lambda3"],
+            "lambda4_evidence": self.evidence["lambda4"],
+            "refinement_runs": self.refinement["runs"],
+            "refinement": dict(self.refinement),
+            "scan": {"lam": self.scan_lam.tolist(), "starts": int(cls.shape[1]),
+                     "seed": self.seed, "store": self.scan_store,
+                     "class_counts": {STEADY_CODES[c]: int((cls == c).sum())
+                                      for c in np.unique(cls)}},
+            "linear_programs": self.linear_programs, "lp_wall_time_s": self.lp_wall_time_s,
+            "units": dict(SUMMARY_UNITS),
+        }
+        if self.n_nodes == 2:
+            summary["safe_region_vertices"] = polygon_vertices(region, self.lam)
+        return summary
+
+    def to_dataset(self) -> xr.Dataset:
+        """Classes and dissipation over (lam, start) and (trial_lam, start), G, h0, m and
+        θ extreme over the constraints.
+
+        The only place the Dataset of a shakedown study is built.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        region, data = self.region, self.scan
+        cls = data["steady_state"]
+        ds = xr.Dataset(
+            {"steady_state": (("lam", "start"), cls, {
+                "units": "1", "flag_meanings": " ".join(STEADY_CODES)}),
+             "dissipation_per_cycle": (("lam", "start"), data["dissipation_per_cycle"],
+                                       {"units": "J"}),
+             "dissipation_per_node": (("lam", "start", "node"), data["dissipation_per_node"],
+                                      {"units": "J"}),
+             "n_slipping": (("lam", "start"), data["n_slipping"], {"units": "1"}),
+             "memory_erased": (("lam", "start"), data["memory_erased"], {"units": "1"}),
+             "initial_slip": (("lam", "start", "node"), data["initial_slip"], {"units": "m"}),
+             "G": (("constraint", "node"), region.G, {"units": "N/m"}),
+             "h0": (("constraint",), region.h0, {"units": "N"}),
+             "m": (("constraint",), region.m, {"units": "N"}),
+             "theta_extreme": (("constraint",), region.theta_extreme, {"units": "rad"})},
+            coords={"lam": ("lam", self.scan_lam, {"units": "1"}),
+                    "start": ("start", np.arange(cls.shape[1]), {"units": "1"})})
+        l2 = self.lambda2
+        ds.attrs.update({"lambda1": self.lambda1, "lambda2": l2 if np.isfinite(l2) else -1.0})
+        if self.trial_lam.size:
+            trial, tdims = self.trials, ("trial_lam", "start")
+            ds = ds.assign_coords(trial_lam=("trial_lam", self.trial_lam, {"units": "1"}))
+            ds["trial_steady_state"] = (tdims, trial["steady_state"], {
+                "units": "1", "flag_meanings": " ".join(STEADY_CODES)})
+            ds["trial_dissipation_per_cycle"] = (tdims, trial["dissipation_per_cycle"],
+                                                 {"units": "J"})
+            ds["trial_n_slipping"] = (tdims, trial["n_slipping"], {"units": "1"})
+            ds["trial_memory_erased"] = (tdims, trial["memory_erased"], {"units": "1"})
+            ds["trial_initial_slip"] = (tdims + ("node",), trial["initial_slip"],
+                                        {"units": "m"})
+        return ds
+
+    def figures(self, dataset: xr.Dataset | None = None) -> dict:
+        """``dissipation_vs_lambda`` and, for N = 2 with finite λ2, ``safe_region_panels``
+        (trajectories below λ1, between λ1 and λ2, above λ2).
+
+        Returns
+        -------
+        dict of str to callable
+        """
+        l1, l2, trial = self.lambda1, self.lambda2, self.trials
+        refined = {"lambda3": self.lambda3_bracket, "lambda4": self.lambda4_bracket}
+        figures = {"dissipation_vs_lambda": lambda: plots.dissipation_vs_lambda(
+            self.scan_lam, self.scan["dissipation_per_cycle"], self.scan["steady_state"],
+            l1, l2, self.lambda3_grid_bracket, self.lambda4_grid_bracket, refined=refined,
+            trials=(self.trial_lam, trial["dissipation_per_cycle"], trial["steady_state"])
+            if self.trial_lam.size else None)}
+        if self.n_nodes == 2 and np.isfinite(l2):
+            figures["safe_region_panels"] = lambda: plots.safe_region_panels(
+                self.region, _panels(self.discrete_case, self.region, l1, l2, self.lam,
+                                     self.seed), l1, l2)
+        return figures
 
 
 def check_sizes(n: int, lam_points: int, starts: int, lam_tol: float) -> None:

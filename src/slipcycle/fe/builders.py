@@ -111,6 +111,61 @@ def block_on_rigid(*, width: float, height: float, E: float, nu: float,
 
     Contact candidates are the bottom-face nodes with |x| <= contact_width/2 (default:
     the whole face, complete contact); ``elements`` elements span the contact zone.
+
+    Parameters
+    ----------
+    width : float
+        Block width (m): x ∈ [−width/2, width/2].
+    height : float
+        Block height (m): y ∈ [0, height], the flat at y = 0.
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio (plane strain), 0 ≤ ν < 0.5.
+    contact_width : float, optional
+        Width (m) of the zone of contact candidates, |x| ≤ contact_width/2; default
+        ``width``.
+    elements : int
+        Elements across the contact zone, of uniform size h = contact_width/elements (m);
+        the zone holds 2·elements + 1 contact nodes with ``P2``, elements + 1 with ``P1``.
+    grading : float
+        Geometric growth ratio (> 1) of the element size away from the contact zone and
+        with depth.
+    element : {"P2", "P1"}
+        Quadratic or linear Lagrange triangles.
+    top : {"displacement", "platen", "traction"}
+        How body 1 is loaded through its top face (module docstring): moved rigidly by
+        1 m (cases in m), a bonded rigid platen free to translate, or uniform tractions
+        (cases of 1 N resultant). With ``"platen"`` or ``"traction"`` body 1 is supported
+        only through its contact: the reduced stiffness keeps its rigid-body modes
+        (positive semi-definite), which ``slipcycle reduce`` refuses.
+    thickness : float
+        Out-of-plane thickness of the plane-strain slab (m); forces and stiffnesses are
+        per this thickness (N, N/m).
+    formulation : {"auto", "displacement", "mixed"}
+        Displacement elements, the P2–P0 mixed element with the pressure condensed out
+        (no volumetric locking as ν → 0.5), or ``"auto"``: mixed for ``P2`` with ν > 0.4.
+
+    Returns
+    -------
+    Problem
+        ``K`` the stiffness (n, n) (N/m), ``dofs``, ``contact`` the N contact nodes on
+        the rigid flat (n = (0, 1), t = (1, 0), ordered by x, initial gap 0), ``fixed``
+        the prescribed DOFs, ``ties`` (platen), ``cases`` ``normal`` and ``tangential``,
+        and ``info`` (the arguments, for the output metadata).
+
+    Raises
+    ------
+    ValueError
+        An unknown ``top`` or ``formulation``.
+
+    References
+    ----------
+    Gustafsson, T. & McBain, G. D. (2020). scikit-fem: A Python package for finite element
+    assembly. J. Open Source Softw. 5(52), 2369. Boffi, D., Brezzi, F. & Fortin, M. (2013).
+    Mixed Finite Element Methods and Applications, Springer, §8.6 (P2–P0). Dundurs, J. (1969).
+    J. Appl. Mech. 36, 650–652 (β = (1 − 2ν)/(2(1 − ν)) on a rigid flat: normal–tangential
+    coupling).
     """
     cw = width if contact_width is None else contact_width
     x = interface_grid(width, cw, elements, grading)
@@ -136,7 +191,59 @@ def two_blocks(*, width: float, upper: dict, lower: dict, contact_width: float |
     """Two rectangular blocks of equal width, ``upper`` (body 1) on ``lower`` (body 2).
 
     ``upper`` and ``lower`` are dicts with ``height`` (m), ``E`` (Pa), ``nu``. The lower
-    block is clamped on its bottom face; the meshes match node to node on y = 0.
+    block is clamped on its bottom face; the meshes match node to node on y = 0 (the
+    lower mesh is the mirror image of an upper one).
+
+    Parameters
+    ----------
+    width : float
+        Width of both blocks (m): x ∈ [−width/2, width/2].
+    upper : dict
+        Body 1, y ∈ [0, height]: ``{"height": m, "E": Pa, "nu": -}``.
+    lower : dict
+        Body 2, y ∈ [−height, 0], clamped at y = −height: same keys.
+    contact_width : float, optional
+        Width (m) of the zone of contact pairs, |x| ≤ contact_width/2; default ``width``.
+    elements : int
+        Elements across the contact zone, of uniform size h = contact_width/elements (m);
+        the zone holds 2·elements + 1 contact nodes with ``P2``, elements + 1 with ``P1``.
+    grading : float
+        Geometric growth ratio (> 1) of the element size away from the contact zone and
+        with depth.
+    element : {"P2", "P1"}
+        Quadratic or linear Lagrange triangles.
+    top : {"displacement", "platen", "traction"}
+        How body 1 is loaded through its top face (module docstring): moved rigidly by
+        1 m (cases in m), a bonded rigid platen free to translate, or uniform tractions
+        (cases of 1 N resultant). With ``"platen"`` or ``"traction"`` body 1 is supported
+        only through its contact: the reduced stiffness keeps its rigid-body modes
+        (positive semi-definite), which ``slipcycle reduce`` refuses.
+    thickness : float
+        Out-of-plane thickness of the plane-strain slab (m); forces and stiffnesses are
+        per this thickness (N, N/m).
+    formulation : {"auto", "displacement", "mixed"}
+        Displacement elements, the P2–P0 mixed element with the pressure condensed out
+        (no volumetric locking as ν → 0.5), or ``"auto"``: mixed for ``P2`` with ν > 0.4.
+
+    Returns
+    -------
+    Problem
+        ``K`` the block-diagonal stiffness (n, n) (N/m), ``dofs`` per body, ``contact``
+        the N node pairs (n = (0, 1) from body 2 into body 1, t = (1, 0), ordered by x,
+        initial gap 0), ``fixed`` the prescribed DOFs, ``ties`` (platen), ``cases``
+        ``normal`` and ``tangential``, and ``info`` (the arguments, for the metadata).
+
+    Raises
+    ------
+    ValueError
+        An unknown ``top`` or ``formulation``.
+
+    References
+    ----------
+    Gustafsson, T. & McBain, G. D. (2020). scikit-fem: A Python package for finite element
+    assembly. J. Open Source Softw. 5(52), 2369. Boffi, D., Brezzi, F. & Fortin, M. (2013).
+    Mixed Finite Element Methods and Applications, Springer, §8.6 (P2–P0). Dundurs, J. (1969).
+    J. Appl. Mech. 36, 650–652 (β of the pair: B = 0 for identical blocks).
     """
     cw = width if contact_width is None else contact_width
     x = interface_grid(width, cw, elements, grading)
@@ -169,6 +276,63 @@ def cylinder_on_block(*, radius: float, cylinder: dict, block: dict, width: floa
     contact_width/2, paired node to node at equal x; the initial gap g_j is the height
     of the (piecewise straight) cylinder surface above the block at x_j (≈ x²/2R) and
     enters the load case ``gap``.
+
+    Parameters
+    ----------
+    radius : float
+        R (m), > width/2.
+    cylinder : dict
+        Body 1: ``{"height": m, "E": Pa, "nu": -}``; ``height`` is the y of its flat top
+        (the arc touches y = 0 at x = 0).
+    block : dict
+        Body 2, y ∈ [−height, 0], clamped at its bottom: same keys.
+    width : float
+        Width of both bodies (m): x ∈ [−width/2, width/2], width < 2R.
+    contact_width : float
+        Width (m) of the zone of contact pairs, |x| ≤ contact_width/2 (required: it should
+        exceed the Hertzian contact width 2a of the loads to be applied).
+    elements : int
+        Elements across the contact zone, of uniform size h = contact_width/elements (m);
+        the zone holds 2·elements + 1 contact nodes with ``P2``, elements + 1 with ``P1``.
+    grading : float
+        Geometric growth ratio (> 1) of the element size away from the contact zone and
+        with depth.
+    element : {"P2", "P1"}
+        Quadratic or linear Lagrange triangles.
+    top : {"displacement", "platen", "traction"}
+        How body 1 is loaded through its top face (module docstring): moved rigidly by
+        1 m (cases in m), a bonded rigid platen free to translate, or uniform tractions
+        (cases of 1 N resultant). With ``"platen"`` or ``"traction"`` body 1 is supported
+        only through its contact: the reduced stiffness keeps its rigid-body modes
+        (positive semi-definite), which ``slipcycle reduce`` refuses.
+    thickness : float
+        Out-of-plane thickness of the plane-strain slab (m); forces and stiffnesses are
+        per this thickness (N, N/m).
+    formulation : {"auto", "displacement", "mixed"}
+        Displacement elements, the P2–P0 mixed element with the pressure condensed out
+        (no volumetric locking as ν → 0.5), or ``"auto"``: mixed for ``P2`` with ν > 0.4.
+
+    Returns
+    -------
+    Problem
+        ``K`` the block-diagonal stiffness (n, n) (N/m), ``dofs`` per body, ``contact``
+        the N node pairs (n = (0, 1) from body 2 into body 1, t = (1, 0), ordered by x,
+        initial gaps g_j in m), ``fixed`` the prescribed DOFs, ``ties`` (platen),
+        ``cases`` ``normal``, ``tangential`` and ``gap`` (apply it with factor 1), and
+        ``info`` (the arguments, for the metadata).
+
+    Raises
+    ------
+    ValueError
+        ``width`` ≥ 2 ``radius``, an unknown ``top`` or ``formulation``.
+
+    References
+    ----------
+    Gustafsson, T. & McBain, G. D. (2020). scikit-fem: A Python package for finite element
+    assembly. J. Open Source Softw. 5(52), 2369. Boffi, D., Brezzi, F. & Fortin, M. (2013).
+    Mixed Finite Element Methods and Applications, Springer, §8.6 (P2–P0). Johnson, K. L.
+    (1985). Contact Mechanics, §4.2 and §7.6 (the 2-D Hertz and Cattaneo–Mindlin
+    solutions the model is checked against).
     """
     if width >= 2 * radius:
         raise ValueError("cylinder_on_block: width must be smaller than 2 * radius")
@@ -196,17 +360,53 @@ def from_mesh(body: Body, *, contact: str = "contact", normal=(0.0, 1.0),
               thickness: float = 1.0, formulation: str = "auto") -> Problem:
     """A body read from a mesh file, on a rigid flat perpendicular to ``normal``.
 
+    The flat passes through the contact node lowest along ``normal``; the other contact
+    nodes get the initial gap g_j = n·(x_j − x_lowest) ≥ 0 (m), which enters a load case
+    ``gap`` when any is positive.
+
     Parameters
     ----------
     body : Body
-        With boundaries named ``contact``, the ``clamped`` ones and those of ``loads``.
-    normal : (2,) array
-        Normal of the flat pointing into the body; t = (n_y, −n_x).
-    clamped : names of boundaries with u = 0.
+        With boundaries named ``contact``, the ``clamped`` ones and those of ``loads``
+        (e.g. from :func:`~slipcycle.fe.meshfile.read_mesh_body`); E (Pa), ν, mesh in m.
+    contact : str
+        Name of the boundary whose nodes are the contact candidates.
+    normal : (2,) array_like
+        Normal of the flat pointing into the body (normalised here); t = (n_y, −n_x).
+    clamped : tuple of str
+        Names of boundaries held at u = 0 in every case.
     loads : list of dict
         Basic load cases, each ``{"name", "boundary", "traction": (t_x, t_y)}`` (the
         case is per unit of that traction, unit "Pa") or ``{"name", "boundary",
         "displacement": (u_x, u_y)}`` (m; the boundary is then held in every other case).
+    element : {"P2", "P1"}
+        Quadratic or linear Lagrange triangles.
+    thickness : float
+        Out-of-plane thickness of the plane-strain slab (m).
+    formulation : {"auto", "displacement", "mixed"}
+        As for :func:`block_on_rigid`: ``"auto"`` is the P2–P0 mixed element for ``P2``
+        with ν > 0.4.
+
+    Returns
+    -------
+    Problem
+        ``K`` (n, n) (N/m), ``dofs``, ``contact`` (N nodes against the rigid flat, ordered
+        along t, gaps g_j), ``fixed`` (DOFs of the clamped and displacement-loaded
+        boundaries; a node on two of them keeps the value of the first), ``ties`` (none),
+        ``cases`` in the order of ``loads`` (then ``gap``) and ``info``.
+
+    Raises
+    ------
+    slipcycle.io.case.CaseError
+        No nodes on the ``contact`` boundary.
+    ValueError
+        An unknown ``formulation``.
+
+    References
+    ----------
+    Gustafsson, T. & McBain, G. D. (2020). scikit-fem: A Python package for finite element
+    assembly. J. Open Source Softw. 5(52), 2369. Boffi, D., Brezzi, F. & Fortin, M. (2013).
+    Mixed Finite Element Methods and Applications, Springer, §8.6 (P2–P0).
     """
     K, dofs = assemble([body], element, thickness, formulation)
     cs = contact_on_flat(dofs, 0, contact, normal)

@@ -23,6 +23,29 @@ def dundurs_beta(E1: float, nu1: float, E2: float | None = None, nu2: float | No
 
     β = [(1 − 2ν₁)/μ₁ − (1 − 2ν₂)/μ₂] / [2 ((1 − ν₁)/μ₁ + (1 − ν₂)/μ₂)]; β = 0 means the
     normal and tangential half-plane problems are uncoupled.
+
+    Parameters
+    ----------
+    E1 : float
+        Young's modulus of body 1 (Pa).
+    nu1 : float
+        Poisson's ratio of body 1.
+    E2 : float, optional
+        Young's modulus of body 2 (Pa); None: a rigid body 2 (1/μ₂ = 0).
+    nu2 : float, optional
+        Poisson's ratio of body 2; required with ``E2``.
+
+    Returns
+    -------
+    float
+        β (dimensionless; |β| ≤ 1/2 for 0 ≤ ν ≤ 1/2); on a rigid flat
+        β = (1 − 2ν₁)/(2(1 − ν₁)).
+
+    References
+    ----------
+    Dundurs, J. (1969). Discussion of "Edge-bonded dissimilar orthogonal elastic wedges
+    under normal and shear loading". J. Appl. Mech. 36, 650–652. Barber, J. R. (2018).
+    Contact Mechanics, Springer, §1.4.
     """
     mu1 = E1 / (2 * (1 + nu1))
     a1, b1 = (1 - 2 * nu1) / mu1, (1 - nu1) / mu1
@@ -38,6 +61,23 @@ def coupling_ratio(model: ReducedModel) -> float:
     Dominated by the element-scale part of the reduced stiffness, so for a β = 0 pair of
     half-planes it tends to zero only with the discretisation error (exactly zero for
     mirror-image meshes of identical bodies); see :func:`smooth_coupling`.
+
+    Parameters
+    ----------
+    model : ReducedModel
+        Its blocks A (tangential) and B (normal force per unit slip), (N, N) in N/m.
+
+    Returns
+    -------
+    float
+        ‖B‖_F / ‖A‖_F (dimensionless, Frobenius norms).
+
+    References
+    ----------
+    Barber, J. R. (2012). Frictional systems under periodic loads — history-dependence,
+    non-uniqueness and energy dissipation. J. Phys.: Conf. Ser. 382, 012002 (B, the
+    normal–tangential coupling of the reduced system). Dundurs, J. (1969). J. Appl. Mech.
+    36, 650–652 (β, its continuum counterpart).
     """
     return float(np.linalg.norm(model.B) / np.linalg.norm(model.A))
 

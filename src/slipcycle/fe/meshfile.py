@@ -59,18 +59,42 @@ def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
                    scale: float = 1.0) -> Body:
     """Read a triangle mesh and name its boundaries.
 
+    Triangles (``triangle`` or ``triangle6``; only the corner nodes are kept) make a
+    linear scikit-fem mesh in the x–y plane; each line cell of a tag must be an edge of
+    the triangles, and becomes a facet of the named boundary (module docstring for how
+    tags are matched).
+
     Parameters
     ----------
-    path : path of the mesh file.
-    tags : dict
-        Name used by slipcycle (e.g. ``"contact"``) → tag in the file.
-    E, nu : elastic constants, Pa and -.
-    scale : factor applied to the coordinates (e.g. 1e-3 for a file in mm).
+    path : str or pathlib.Path
+        Mesh file in any format meshio reads (Gmsh ``.msh``, ``.vtu``, ``.xdmf``, ...);
+        planar (z constant).
+    tags : dict of str to str
+        Boundary name used by slipcycle (e.g. ``"contact"``, a clamped or loaded
+        boundary) → tag in the file: a cell-set name, a Gmsh physical name, or a physical
+        number as a string.
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio (plane strain), 0 ≤ ν < 0.5.
+    name : str
+        Name of the body in messages and metadata.
+    key : str
+        Case-file key the errors name (a tag error names ``<table of key>.<boundary>``).
+    scale : float
+        Factor applied to the coordinates to give metres (e.g. 1e-3 for a file in mm).
+
+    Returns
+    -------
+    Body
+        ``name``, the mesh (coordinates in m, ``mesh.boundaries`` the named facet arrays,
+        one per key of ``tags``), ``E``, ``nu`` and ``info = {"file": str(path)}``.
 
     Raises
     ------
     CaseError
-        Unreadable file, no triangles, or a tag that names no line cells.
+        Unreadable file, no triangles, a mesh that is not planar, a tag that names no
+        line cells, or a line that is not an edge of the triangles.
     """
     import meshio
 

@@ -281,7 +281,50 @@ def transformation(problem: Problem) -> tuple[sp.csr_matrix, int, np.ndarray, li
 
 
 def reduce_problem(problem: Problem, block: int = 128) -> ReducedModel:
-    """Condense ``problem`` to its contact pairs (see module docstring)."""
+    """Condense ``problem`` to its contact pairs (see module docstring).
+
+    With u = T z + u₀, z = [y; v; w − g], the transformed stiffness K' = Tᵀ K T is
+    condensed onto the contact variables, K_red = K'_dd − K'_dy K'_yy⁻¹ K'_yd (one sparse
+    factorisation, :func:`slipcycle.fe.condense.schur_complement`), so that
+    [q; p] = K_red [v; w] + [q^w; p^w] with K_red = [[A, Bᵀ], [B, C]].
+
+    Parameters
+    ----------
+    problem : Problem
+        The assembled model: stiffness (N/m), DOF bookkeeping, the N contact pairs,
+        prescribed DOFs, platen ties and the basic load cases.
+    block : int
+        Right-hand sides solved at once should the condensation fall back to block solves
+        with the interior factors (memory against speed; the result does not depend on it).
+
+    Returns
+    -------
+    ReducedModel
+        ``A``, ``B``, ``C`` (N, N) (N/m; A tangential, C normal, B normal force per unit
+        slip); ``q_w``, ``p_w`` (n_cases, N), one row per case of ``problem.cases`` in
+        order: the reactions with every pair held at v = w = 0 per unit of the case (N/N,
+        N/m, N/Pa; the ``gap`` row, −[Bᵀ g; C g], in N), p compressive positive;
+        ``load_cases`` and ``load_units``; ``coords`` (N, 2) and ``gap`` (N,) (m);
+        ``normal``, ``tangent`` (2,); ``info`` (``problem.info`` with ``n_dofs``,
+        ``n_interior``, ``n_contact_nodes``, ``formulations``, ``transform_seconds``,
+        ``condense_seconds``).
+
+    Raises
+    ------
+    slipcycle.fe.condense.SingularModelError
+        The stiffness with every contact node held is singular: a body or part of one
+        is not supported against rigid motion.
+    ValueError
+        A contact node that is also supported or tied to a platen, or a body-2 contact
+        node that is also a body-1 contact node.
+
+    References
+    ----------
+    Guyan, R. J. (1965). Reduction of stiffness and mass matrices. AIAA J. 3(2), 380.
+    Barber, J. R. (2012). Frictional systems under periodic loads — history-dependence,
+    non-uniqueness and energy dissipation. J. Phys.: Conf. Ser. 382, 012002 (the reduced
+    stiffness A, B, C of the contact nodes).
+    """
     t0 = time.perf_counter()
     cs = problem.contact
     N = cs.n

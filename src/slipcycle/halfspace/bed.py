@@ -180,20 +180,56 @@ def make_bed(profile, *, friction: float, compliance_ratio: float, P_max: float,
              n_sliders: int = 1000, P_lo: float | None = None) -> SliderBed:
     """Discretise ``profile`` into a slider bed covering loads up to ``P_max``.
 
+    The bed is the Ciavarella–Jäger equivalent of the contact: independent Coulomb
+    sliders indexed by the approach s at which they touch, with density k(s) = d²P/dU²
+    (module docstring). Cells have equal increments of the normal stiffness S = dP/dU
+    (for the sphere, equal increments of contact radius, as in the method of
+    dimensionality reduction); each cell is one slider of stiffness ΔS at the
+    stiffness-weighted centroid of its levels, so the discrete P(U) equals the exact law
+    at every cell edge. Loads below ``P_lo`` are lumped into one slider that reproduces P
+    and S at ``P_lo``. Profiles with an exact finite slider set
+    (:meth:`Profile.concentrated`: flat punch, tabulated) use it as it is.
+
     Parameters
     ----------
     profile : Profile
-        Normal law of the contact.
-    friction, compliance_ratio : float
-        f and λ_c.
+        Normal law P(U) of the contact (:mod:`slipcycle.halfspace.profiles`).
+    friction : float
+        Coulomb coefficient f (dimensionless); slider i carries at most
+        f k_i (U − s_i)₊.
+    compliance_ratio : float
+        λ_c = (dV/dQ)/(dU/dP) (dimensionless): slider i has tangential stiffness k_i/λ_c
+        (:class:`~slipcycle.halfspace.elastic.ContactElasticity`).
     P_max : float
-        Largest normal load of the history (N or N/m); the bed is exact up to it.
+        Largest normal load of the history (N, or N/m for plane profiles); the bed is
+        exact up to it and its last cell edge is ``P_max``.
     n_sliders : int
-        Number of distributed sliders (profiles with an exact finite slider set ignore it).
+        Number of distributed sliders (cells) between ``P_lo`` and ``P_max``; profiles
+        with an exact finite slider set ignore it.
     P_lo : float, optional
-        Loads below this are lumped into one slider. Defaults to 1e-6·P_max (to
-        ``UNLUMPED_FRACTION``·P_max for the rough law); a history's own value comes from
-        :func:`lumping_load`.
+        Load (N or N/m) below which the law is lumped into one slider. Defaults to
+        1e-6·P_max, and for the rough law (also when ≤ 0) to
+        ``UNLUMPED_FRACTION``·P_max; a history's own value comes from
+        :func:`lumping_load`. Ignored by profiles with an exact finite slider set.
+
+    Returns
+    -------
+    SliderBed
+        n sliders in ascending level: ``level`` (n,) m, ``normal_stiffness`` (n,) N/m
+        (N/m² for plane profiles), the given ``compliance_ratio`` and ``friction``,
+        ``edge_load`` (n + 1,) N or N/m (0 first when a lumped slider or first touch
+        starts the bed) and ``edge_size`` (n + 1,) m, the contact radius or half-width at
+        the edges (None for the rough law and profiles without a contact size). n is at
+        most ``n_sliders`` + 1 (cells of zero stiffness increment are dropped; one more
+        for the lumped slider).
+
+    References
+    ----------
+    Ciavarella, M. (1998). The generalized Cattaneo partial slip plane contact problem.
+    I—Theory. Int. J. Solids Struct. 35, 2349–2362. Jäger, J. (1998). A new principle in
+    contact mechanics. J. Tribol. 120, 677–684. Popov, V. L. & Heß, M. (2015). Method of
+    Dimensionality Reduction in Contact Mechanics and Friction, Springer (equal increments
+    of contact radius).
     """
     from slipcycle.halfspace.profiles import RoughExponential
 

@@ -25,9 +25,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from slipcycle.errors import InputError
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.loads import contact_loads
-from slipcycle.halfspace.model import HalfspaceModel, solve
+from slipcycle.halfspace.model import HalfspaceModel, LoadPathError, solve
 from slipcycle.halfspace.profiles import (
     Cylinder2D,
     FlatPunch,
@@ -45,7 +46,7 @@ PROFILES = ("sphere", "cylinder", "flat_punch", "power_law", "rough_exponential"
 
 
 def _elasticity(sec: Section, plane: bool) -> ContactElasticity:
-    ratio = sec.float("compliance_ratio", None, gt=0.0)
+    ratio = sec.float("compliance_ratio", None)
     if sec.has("contact_modulus"):
         if sec.has("E") or sec.has("nu"):
             raise sec.error("contact_modulus", "give either E and nu or contact_modulus, not both")
@@ -63,7 +64,7 @@ def _elasticity(sec: Section, plane: bool) -> ContactElasticity:
 def _profile(sec: Section):
     name = sec.string("profile", choices=PROFILES)
     if name in ("rough_exponential", "tabulated"):
-        ratio = sec.float("compliance_ratio", None, gt=0.0)
+        ratio = sec.float("compliance_ratio", None)
         if name == "rough_exponential":
             prof = RoughExponential(sec.float("gamma_sigma", gt=0.0))
             for key in ("E", "nu"):
@@ -180,7 +181,12 @@ _DEFAULT_STEPS = 400
 
 
 def parse_case(case: Case) -> HalfspaceModel:
-    """Validate a ``halfspace`` case completely (raises CaseError) and build the model."""
+    """Validate a ``halfspace`` case completely (raises CaseError) and build the model.
+
+    The reader converts the TOML values; the values themselves are checked by
+    :class:`HalfspaceModel` (and its load path by :meth:`HalfspaceModel.check_loads`),
+    whose errors come out under the case-file key of the field (``_MODEL_KEYS``).
+    """
     if "halfspace" not in case.data and "map" in case.data:
         raise CaseError("map", "this is a Ŵ map case: run it with `slipcycle map` (`slipcycle "
                         "run` needs a [halfspace] table)")
@@ -192,28 +198,66 @@ def parse_case(case: Case) -> HalfspaceModel:
         if users:
             raise sec.error(key, f"not used by profile = {name!r} (only by "
                             f"{', '.join(users)})")
-    friction = sec.float("friction", gt=0.0)
+    friction = sec.float("friction")
     normal, tangential, ncontrol, tcontrol, protocol = _loading(case.section("loading"))
     run = case.section("run", required=False)
-    steps = run.int("steps_per_cycle", _DEFAULT_STEPS, ge=8)
-    model = HalfspaceModel(
+    steps = run.int("steps_per_cycle", _DEFAULT_STEPS)
+    settings = dict(
         profile=profile, elasticity=elasticity, friction=friction, compliance_ratio=ratio,
         normal=normal, tangential=tangential, normal_control=ncontrol,
         tangential_control=tcontrol, protocol=protocol, steps_per_cycle=steps,
-        max_cycles=run.int("cycles", 5, ge=1, le=10000),
-        n_sliders=run.int("sliders", _DEFAULT_SLIDERS, ge=10),
-        assembly_steps=run.int("assembly_steps", max(steps // 4, 10), ge=1),
-        snapshots=np.atleast_1d(run.array("snapshots", [0.0, np.pi / 2, np.pi, 1.5 * np.pi],
-                                          ge=0.0, le=2 * np.pi)),
-        steady_tol=run.float("steady_tol", 1e-9, gt=0.0, lt=1.0),
+        # the model takes any number of cycles; a case file at most 10000
+        max_cycles=run.int("cycles", 5, le=10000),
+        n_sliders=run.int("sliders", _DEFAULT_SLIDERS),
+        assembly_steps=run.int("assembly_steps", max(steps // 4, 10)),
+        snapshots=np.atleast_1d(run.array("snapshots", [0.0, np.pi / 2, np.pi, 1.5 * np.pi])),
+        steady_tol=run.float("steady_tol", 1e-9),
         profile_name=name,
     )
+    try:
+        model = HalfspaceModel(**settings)
+    except InputError as exc:
+        raise CaseError(_MODEL_KEYS.get(exc.key, exc.key), exc.problem) from None
     if "map" in case.data:   # a run case may carry its Ŵ map (slipcycle map reads it)
         case.section("map").ignore()
     case.finish()
     check_memory(model)
-    _check_physics(case, model)
+    try:
+        model.check_loads()
+    except LoadPathError as exc:
+        raise CaseError(_load_path_key(model, exc), exc.problem) from None
     return model
+
+
+#: the case-file key of each field of :class:`HalfspaceModel` (its checks are the model's)
+_MODEL_KEYS = {
+    "profile": "halfspace.profile", "elasticity": "halfspace", "friction": "halfspace.friction",
+    "compliance_ratio": "halfspace.compliance_ratio", "normal": "loading",
+    "tangential": "loading", "normal_control": "loading", "tangential_control": "loading",
+    "protocol": "loading.protocol", "steps_per_cycle": "run.steps_per_cycle",
+    "max_cycles": "run.cycles", "n_sliders": "run.sliders",
+    "assembly_steps": "run.assembly_steps", "snapshots": "run.snapshots",
+    "steady_tol": "run.steady_tol",
+}
+
+
+def _load_path_key(model: HalfspaceModel, exc: LoadPathError) -> str:
+    """The case-file key to blame for a load path the model refuses
+    (:meth:`HalfspaceModel.check_loads`).
+
+    A harmonic normal load that never compresses the contact blames its mean (``P0``), one
+    that becomes tensile its amplitude (``P1``); a tabulated one its table (``P``); an
+    assembly state i its normal value (``loading.protocol[i].P``).
+    """
+    nk = "P" if model.normal_control == "force" else "U"
+    if isinstance(model.normal, TabulatedLoad):
+        normal = f"loading.{nk}"
+    else:
+        normal = f"loading.{nk}0" if exc.reason == "never_compressive" else f"loading.{nk}1"
+    if exc.key.startswith("protocol["):
+        return f"loading.{exc.key}.{nk}"
+    return {"normal": normal, "profile.reference_depth": "halfspace.reference_depth",
+            "profile": "halfspace.table_P"}.get(exc.key, exc.key)
 
 
 def memory_estimate(model: HalfspaceModel) -> float:
@@ -248,36 +292,6 @@ def check_memory(model: HalfspaceModel, limit: float | None = None) -> None:
     }
     key = max(ratios, key=lambda k: ratios[k][0])
     check(key, need, ratios[key][1], limit, advice=f"reduce {key.split('.')[1]}")
-
-
-def _check_physics(case: Case, model: HalfspaceModel) -> None:
-    """Refuse loads the contact cannot carry (before any computation)."""
-    nk = "P" if model.normal_control == "force" else "U"
-    harmonic = not isinstance(model.normal, TabulatedLoad)
-    _, cycle_n, _ = model.cycle_samples()
-    states = [(f"loading.{nk}1" if harmonic else f"loading.{nk}", float(cycle_n.min()))]
-    states += [(f"loading.protocol[{i}].{nk}", float(v))
-               for i, v in enumerate(model.protocol[:, 0])]
-    lo, hi = model.normal_load_range()
-    if model.normal_control == "force":
-        if hi <= 0:
-            raise CaseError(f"loading.{nk}0" if harmonic else f"loading.{nk}",
-                            "the normal load never compresses the contact")
-        rough = isinstance(model.profile, RoughExponential)
-        for key, v in states:
-            if rough and v <= 0:
-                raise CaseError(key, f"a rough contact needs P > 0 throughout the load path "
-                                f"(minimum {v:g} N)")
-            if v < 0:
-                raise CaseError(key, f"normal load becomes tensile (minimum {v:g} N); "
-                                "adhesion is not modelled")
-        if isinstance(model.profile, Cylinder2D) and hi >= model.profile.max_load():
-            raise CaseError("halfspace.reference_depth", "too shallow for the largest load: "
-                            "the plane approach needs a < 2d/e")
-    if isinstance(model.profile, Tabulated) and model.normal_control == "force" \
-            and hi > model.profile.P[-1] * (1 + 1e-12):
-        raise CaseError("halfspace.table_P", f"table ends at {model.profile.P[-1]:g} N but "
-                        f"the loads reach {hi:g} N")
 
 
 def solve_model(model: HalfspaceModel):

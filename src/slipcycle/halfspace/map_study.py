@@ -11,6 +11,8 @@ carry its map) and are not used: Ŵ is dimensionless; W = λ_c γσ f² P0 Ŵ.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numba
 import numpy as np
@@ -20,8 +22,11 @@ from slipcycle.halfspace.wmap import w_hat_map
 from slipcycle.io import CaseError, RunOutputs
 from slipcycle.io.sizes import check_memory, memory_limit
 from slipcycle.plot.halfspace import w_hat_cubic_law, w_hat_vs_phase
+from slipcycle.result import StudyResult
 
-__all__ = ["map_memory_estimate", "parse_map_case", "w_hat_study", "cubic_law_slope",
+__all__ = ["map_memory_estimate", "parse_map_case", "w_hat_study", "w_hat_map_study",
+           "WHatMapResult",
+           "cubic_law_slope",
            "CUBIC_LAW_Q1_HAT", "FIG7_PHASE"]
 
 #: phases [rad] of the Fig. 7 curves
@@ -125,7 +130,7 @@ def cubic_law_slope(Q1_hat: np.ndarray, W_hat: np.ndarray, points: int = 5) -> f
 
 def w_hat_study(P1: np.ndarray, Q1: np.ndarray, ph: np.ndarray, fig_P1: float,
                 fig_Q1: np.ndarray, settings: dict) -> RunOutputs:
-    """Ŵ over a grid, the Fig. 7 curves and the cubic law at small amplitude.
+    """What ``slipcycle map`` writes: ``w_hat_map_study(...).to_outputs()``.
 
     Parameters
     ----------
@@ -135,65 +140,185 @@ def w_hat_study(P1: np.ndarray, Q1: np.ndarray, ph: np.ndarray, fig_P1: float,
     Returns
     -------
     RunOutputs
-        ``dataset``: ``W_hat`` (P1_hat, Q1_hat, phase), NaN where the load path reaches
-        gross slip; ``fig7_W_hat`` (fig7_Q1_hat, fig7_phase) at ``fig_P1`` over
-        :data:`FIG7_PHASE`; ``cubic_law_Q1_hat``/``cubic_law_W_hat`` at P̂1 = 0, φ = 0.
-        ``summary``: ``grid_points``, ``gross_slip_points``, ``wall_time_s``,
-        ``settings``, ``cubic_law_slope`` (:func:`cubic_law_slope`), ``fig7_P1_hat``,
+        See :func:`w_hat_map_study`.
+    """
+    return w_hat_map_study(P1, Q1, ph, fig_P1, fig_Q1, settings).to_outputs()
+
+
+def w_hat_map_study(P1: np.ndarray, Q1: np.ndarray, ph: np.ndarray, fig_P1: float,
+                    fig_Q1: np.ndarray, settings: dict) -> WHatMapResult:
+    """Ŵ over a grid, the Fig. 7 curves and the cubic law at small amplitude.
+
+    Parameters
+    ----------
+    P1, Q1, ph : ndarray, shapes (I,), (J,), (K,)
+        Grid of P̂1 = P1/P0 [1], Q̂1 = Q1/(f P0) [1] and φ [rad] (:func:`parse_map_case`).
+    fig_P1 : float
+        P̂1 of the Fig. 7 curves [1].
+    fig_Q1 : ndarray, shape (M,)
+        Q̂1 of the Fig. 7 curves [1].
+    settings : dict
+        ``steps_per_cycle`` and ``n_sliders`` for :func:`~slipcycle.halfspace.wmap.w_hat_map`.
+
+    Returns
+    -------
+    WHatMapResult
+        Its ``to_outputs()`` is what ``slipcycle map`` writes. ``dataset``: ``W_hat``
+        (P1_hat, Q1_hat, phase), NaN where the load path reaches gross slip;
+        ``fig7_W_hat`` (fig7_Q1_hat, fig7_phase) at ``fig_P1`` over :data:`FIG7_PHASE`;
+        ``cubic_law_Q1_hat``/``cubic_law_W_hat`` at P̂1 = 0, φ = 0. ``summary``:
+        ``grid_points``, ``gross_slip_points``, ``wall_time_s``, ``settings``,
+        ``cubic_law_slope`` (:func:`cubic_law_slope`), ``fig7_P1_hat``,
         ``fig7_phase_of_max`` [rad] and ``fig7_W_hat_max`` per Q̂1, ``units``.
         ``figures``: ``w_hat_vs_phase`` and ``w_hat_cubic_law``.
     """
     t0 = time.perf_counter()
     W = w_hat_map(P1, Q1, ph, **settings)
     # Fig. 7 curves and the cubic law on their own fine grids
-    fig_phase = FIG7_PHASE
-    W7 = w_hat_map([fig_P1], fig_Q1, fig_phase, **settings)[0]
-    q_small = CUBIC_LAW_Q1_HAT
-    W_small = w_hat_map([0.0], q_small, [0.0], **settings)[0, :, 0]
-    elapsed = time.perf_counter() - t0
-    slope = cubic_law_slope(q_small, W_small)
-    attrs = {"units": "1", "long_name": "W / (lambda_c gamma_sigma f^2 P0), nan: gross slip"}
-    p1_attrs = {"units": "1", "long_name": "P1 / P0"}
-    q1_attrs = {"units": "1", "long_name": "Q1 / (f P0)"}
-    ph_attrs = {"units": "rad", "long_name": "phase lag of Q behind P"}
-    ds = xr.Dataset(
-        {"W_hat": (("P1_hat", "Q1_hat", "phase"), W, attrs)},
-        coords={"P1_hat": ("P1_hat", P1, p1_attrs), "Q1_hat": ("Q1_hat", Q1, q1_attrs),
-                "phase": ("phase", ph, ph_attrs)},
-    )
-    fig7 = xr.Dataset({"W_hat": (("P1_hat", "Q1_hat", "phase"), W7[None], attrs)},
-                      coords={"P1_hat": [fig_P1], "Q1_hat": fig_Q1, "phase": fig_phase})
-    ds["fig7_W_hat"] = (("fig7_Q1_hat", "fig7_phase"), W7,
-                        {**attrs, "long_name": f"W_hat at P1_hat = {fig_P1:g}"})
-    ds = ds.assign_coords(fig7_Q1_hat=("fig7_Q1_hat", fig_Q1, q1_attrs),
-                          fig7_phase=("fig7_phase", fig_phase, ph_attrs))
-    ds["cubic_law_Q1_hat"] = ("cubic_law_point", q_small, q1_attrs)
-    ds["cubic_law_W_hat"] = ("cubic_law_point", W_small,
-                             {**attrs, "long_name": "W_hat at P1_hat = 0, phase = 0"})
-    i_max = np.nanargmax(W7, axis=1)
-    summary = {
-        "model": "halfspace",
-        "analysis": "w_hat_map",
-        "grid_points": int(W.size),
-        "gross_slip_points": int(np.isnan(W).sum()),
-        "wall_time_s": elapsed,
-        "settings": settings,
-        "cubic_law_slope": slope,
-        "fig7_P1_hat": fig_P1,
-        "fig7_phase_of_max": dict(zip(map(str, fig_Q1), fig_phase[i_max].tolist(),
-                                      strict=True)),
-        "fig7_W_hat_max": dict(zip(map(str, fig_Q1), np.nanmax(W7, axis=1).tolist(),
-                                   strict=True)),
-        "dissipation_per_cycle": None,
-        "units": {"grid_points": "1", "gross_slip_points": "1", "wall_time_s": "s",
-                  "settings.steps_per_cycle": "1", "settings.n_sliders": "1",
-                  "cubic_law_slope": "1", "fig7_P1_hat": "1", "fig7_phase_of_max": "rad",
-                  "fig7_W_hat_max": "1"},
-    }
-    figures = {
-        "w_hat_vs_phase": lambda: w_hat_vs_phase(fig7, fig_P1),
-        "w_hat_cubic_law": lambda: w_hat_cubic_law(q_small, W_small,
-                                                   f"P̂1 = 0, φ = 0 (slope {slope:.3f})"),
-    }
-    return RunOutputs(summary=summary, dataset=ds, figures=figures,
-                      flags={"model": ("halfspace",), "analysis": ("w_hat_map",)})
+    W7 = w_hat_map([fig_P1], fig_Q1, FIG7_PHASE, **settings)[0]
+    W_small = w_hat_map([0.0], CUBIC_LAW_Q1_HAT, [0.0], **settings)[0, :, 0]
+    return WHatMapResult(wall_time_s=time.perf_counter() - t0, P1_hat=P1, Q1_hat=Q1,
+                         phase=ph, W_hat=W, fig7_P1_hat=fig_P1, fig7_Q1_hat=fig_Q1,
+                         fig7_phase=FIG7_PHASE, fig7_W_hat=W7,
+                         cubic_law_Q1_hat=CUBIC_LAW_Q1_HAT, cubic_law_W_hat=W_small,
+                         settings=settings)
+
+
+_ATTRS = {"units": "1", "long_name": "W / (lambda_c gamma_sigma f^2 P0), nan: gross slip"}
+_P1_ATTRS = {"units": "1", "long_name": "P1 / P0"}
+_Q1_ATTRS = {"units": "1", "long_name": "Q1 / (f P0)"}
+_PH_ATTRS = {"units": "rad", "long_name": "phase lag of Q behind P"}
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class WHatMapResult(StudyResult):
+    """The rough-surface dissipation map Ŵ(P̂1, Q̂1, φ) (``slipcycle map``; Barber 2012).
+
+    Ŵ = W / (λ_c γσ f² P0) is dimensionless; P̂1 = P1/P0, Q̂1 = Q1/(f P0).
+
+    Attributes
+    ----------
+    wall_time_s : float
+        Wall time of the three maps [s].
+    P1_hat, Q1_hat, phase : ndarray, shapes (I,), (J,), (K,)
+        Grid axes [1], [1], [rad].
+    W_hat : ndarray, shape (I, J, K)
+        Ŵ on the grid [1]; NaN where the load path reaches gross slip.
+    fig7_P1_hat : float
+        P̂1 of the Fig. 7 curves [1].
+    fig7_Q1_hat, fig7_phase : ndarray, shapes (M,), (F,)
+        Q̂1 [1] and phases [rad] of the Fig. 7 curves.
+    fig7_W_hat : ndarray, shape (M, F)
+        Ŵ along the Fig. 7 curves [1].
+    cubic_law_Q1_hat, cubic_law_W_hat : ndarray, shape (C,)
+        Small-amplitude points at P̂1 = 0, φ = 0 [1] (Ŵ → (2/3) Q̂1³).
+    settings : dict
+        ``steps_per_cycle`` and ``n_sliders`` used.
+    """
+
+    model: ClassVar[str] = "halfspace"
+    analysis: ClassVar[str] = "w_hat_map"
+    FLAGS: ClassVar[dict] = {"model": ("halfspace",), "analysis": ("w_hat_map",)}
+
+    P1_hat: np.ndarray
+    Q1_hat: np.ndarray
+    phase: np.ndarray
+    W_hat: np.ndarray
+    fig7_P1_hat: float
+    fig7_Q1_hat: np.ndarray
+    fig7_phase: np.ndarray
+    fig7_W_hat: np.ndarray
+    cubic_law_Q1_hat: np.ndarray
+    cubic_law_W_hat: np.ndarray
+    settings: dict
+
+    @property
+    def cubic_law_slope(self) -> float:
+        """Slope of log Ŵ against log Q̂1 at small amplitude (→ 3) [1]."""
+        return cubic_law_slope(self.cubic_law_Q1_hat, self.cubic_law_W_hat)
+
+    def headline(self) -> list[tuple]:
+        """Grid points, gross-slip points, the cubic-law slope and the wall time."""
+        return [("grid_points", int(self.W_hat.size), "1"),
+                ("gross_slip_points", int(np.isnan(self.W_hat).sum()), "1"),
+                ("cubic_law_slope", self.cubic_law_slope, "1"),
+                ("wall_time_s", self.wall_time_s, "s")]
+
+    def summary(self) -> dict:
+        """``summary.json`` of ``slipcycle map``.
+
+        Returns
+        -------
+        dict
+            ``grid_points``, ``gross_slip_points``, ``wall_time_s`` [s], ``settings``,
+            ``cubic_law_slope``, ``fig7_P1_hat``, ``fig7_phase_of_max`` [rad] and
+            ``fig7_W_hat_max`` per Q̂1 (keyed by ``str(Q̂1)``), ``units``.
+        """
+        W, W7, q = self.W_hat, self.fig7_W_hat, self.fig7_Q1_hat
+        i_max = np.nanargmax(W7, axis=1)
+        return {
+            "model": "halfspace",
+            "analysis": "w_hat_map",
+            "grid_points": int(W.size),
+            "gross_slip_points": int(np.isnan(W).sum()),
+            "wall_time_s": self.wall_time_s,
+            "settings": self.settings,
+            "cubic_law_slope": self.cubic_law_slope,
+            "fig7_P1_hat": self.fig7_P1_hat,
+            "fig7_phase_of_max": dict(zip(map(str, q), self.fig7_phase[i_max].tolist(),
+                                          strict=True)),
+            "fig7_W_hat_max": dict(zip(map(str, q), np.nanmax(W7, axis=1).tolist(),
+                                       strict=True)),
+            "dissipation_per_cycle": None,
+            "units": {"grid_points": "1", "gross_slip_points": "1", "wall_time_s": "s",
+                      "settings.steps_per_cycle": "1", "settings.n_sliders": "1",
+                      "cubic_law_slope": "1", "fig7_P1_hat": "1", "fig7_phase_of_max": "rad",
+                      "fig7_W_hat_max": "1"},
+        }
+
+    def to_dataset(self) -> xr.Dataset:
+        """``W_hat`` (P1_hat, Q1_hat, phase), ``fig7_W_hat`` (fig7_Q1_hat, fig7_phase) and
+        ``cubic_law_Q1_hat``/``cubic_law_W_hat`` (cubic_law_point).
+
+        The only place the Dataset of a Ŵ map is built.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        ds = xr.Dataset(
+            {"W_hat": (("P1_hat", "Q1_hat", "phase"), self.W_hat, _ATTRS)},
+            coords={"P1_hat": ("P1_hat", self.P1_hat, _P1_ATTRS),
+                    "Q1_hat": ("Q1_hat", self.Q1_hat, _Q1_ATTRS),
+                    "phase": ("phase", self.phase, _PH_ATTRS)},
+        )
+        ds["fig7_W_hat"] = (("fig7_Q1_hat", "fig7_phase"), self.fig7_W_hat,
+                            {**_ATTRS, "long_name": f"W_hat at P1_hat = {self.fig7_P1_hat:g}"})
+        ds = ds.assign_coords(fig7_Q1_hat=("fig7_Q1_hat", self.fig7_Q1_hat, _Q1_ATTRS),
+                              fig7_phase=("fig7_phase", self.fig7_phase, _PH_ATTRS))
+        ds["cubic_law_Q1_hat"] = ("cubic_law_point", self.cubic_law_Q1_hat, _Q1_ATTRS)
+        ds["cubic_law_W_hat"] = ("cubic_law_point", self.cubic_law_W_hat,
+                                 {**_ATTRS, "long_name": "W_hat at P1_hat = 0, phase = 0"})
+        return ds
+
+    def figures(self, dataset: xr.Dataset | None = None) -> dict:
+        """``w_hat_vs_phase`` (Barber 2012, Fig. 7) and ``w_hat_cubic_law``.
+
+        Returns
+        -------
+        dict of str to callable
+        """
+        # the plot takes the Fig. 7 curves as a (P1_hat, Q1_hat, phase) array
+        curves = {"P1_hat": [self.fig7_P1_hat], "Q1_hat": self.fig7_Q1_hat,
+                  "phase": self.fig7_phase}
+        W7 = self.fig7_W_hat[None]
+
+        def vs_phase():
+            fig7 = xr.Dataset({"W_hat": (("P1_hat", "Q1_hat", "phase"), W7, _ATTRS)},
+                              coords=curves)
+            return w_hat_vs_phase(fig7, self.fig7_P1_hat)
+
+        label = f"P̂1 = 0, φ = 0 (slope {self.cubic_law_slope:.3f})"
+        return {"w_hat_vs_phase": vs_phase,
+                "w_hat_cubic_law": lambda: w_hat_cubic_law(
+                    self.cubic_law_Q1_hat, self.cubic_law_W_hat, label)}

@@ -12,7 +12,22 @@ from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.history import HistoryResult, run_history
 from slipcycle.loading import cycle_angles, piecewise_linear_path
 
-__all__ = ["HalfspaceModel", "solve"]
+__all__ = ["HalfspaceModel", "LoadPathError", "solve"]
+
+
+class LoadPathError(InputError):
+    """A load path the contact cannot carry (:meth:`HalfspaceModel.check_loads`).
+
+    ``key`` names the field (``normal``, ``protocol[i]``, ``profile``,
+    ``profile.reference_depth``); ``reason`` names the check that failed, one of
+    ``"not_finite"``, ``"never_compressive"``, ``"tensile"``, ``"rough_unloaded"``,
+    ``"reference_depth"``, ``"table_end"`` (a case-file reader blames the mean of a
+    harmonic load for ``"never_compressive"``, its amplitude for ``"tensile"``).
+    """
+
+    def __init__(self, key: str, problem: str, reason: str):
+        super().__init__(key, problem)
+        self.reason = reason
 
 
 @dataclass(frozen=True)
@@ -100,17 +115,22 @@ class HalfspaceModel:
             raise InputError("protocol", "must be an (S, 2) array of (normal, tangential) "
                                          f"states, got shape {protocol.shape}")
         snaps = np.atleast_1d(_finite_array("snapshots", self.snapshots))
-        if snaps.ndim != 1 or np.any(snaps < 0) or np.any(snaps > 2 * np.pi):
+        if snaps.ndim != 1:
             raise InputError("snapshots", "must be cycle angles in [0, 2π] rad")
+        _bound("snapshots", snaps, ">=", 0.0)
+        _bound("snapshots", snaps, "<=", 2 * np.pi)
         for name, low in (("steps_per_cycle", 8), ("max_cycles", 1), ("n_sliders", 10),
                           ("assembly_steps", 1)):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
-                    or value < low:
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
                 raise InputError(name, f"must be an integer >= {low}, got {value!r}")
+            _bound(name, value, ">=", low)
         tol = self.steady_tol
-        if not (isinstance(tol, (int, float, np.floating)) and 0.0 < tol < 1.0):
+        if isinstance(tol, bool) or not isinstance(tol, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(tol):
             raise InputError("steady_tol", f"must be in (0, 1), got {tol!r}")
+        _bound("steady_tol", tol, ">", 0.0)
+        _bound("steady_tol", tol, "<", 1.0)
         object.__setattr__(self, "protocol", protocol)
         object.__setattr__(self, "snapshots", snaps)
 
@@ -128,8 +148,10 @@ class HalfspaceModel:
 
         Raises
         ------
-        slipcycle.errors.InputError
-            ``normal`` (cycle), ``protocol`` (assembly states), ``profile``.
+        LoadPathError
+            An :class:`~slipcycle.errors.InputError` keyed ``normal`` (cycle),
+            ``protocol[i]`` (assembly state i), ``profile.reference_depth`` (cylinder) or
+            ``profile`` (table), with the ``reason`` of the failed check.
         """
         from slipcycle.halfspace.profiles import Cylinder2D, RoughExponential, Tabulated
 
@@ -138,25 +160,26 @@ class HalfspaceModel:
         _, cycle_n, _ = self.cycle_samples()
         lo, hi = self.normal_load_range()
         if not np.isfinite(lo) or not np.isfinite(hi):
-            raise InputError("normal", "the normal load must be finite")
+            raise LoadPathError("normal", "the normal load must be finite", "not_finite")
         if hi <= 0:
-            raise InputError("normal", "the normal load never compresses the contact")
+            raise LoadPathError("normal", "the normal load never compresses the contact",
+                                "never_compressive")
         rough = isinstance(self.profile, RoughExponential)
         states = [("normal", float(cycle_n.min()))]
         states += [(f"protocol[{i}]", float(v)) for i, v in enumerate(self.protocol[:, 0])]
         for key, v in states:
             if rough and v <= 0:
-                raise InputError(key, "a rough contact needs P > 0 throughout the load "
-                                      f"path (minimum {v:g} N)")
+                raise LoadPathError(key, "a rough contact needs P > 0 throughout the load "
+                                         f"path (minimum {v:g} N)", "rough_unloaded")
             if v < 0:
-                raise InputError(key, f"normal load becomes tensile (minimum {v:g} N); "
-                                      "adhesion is not modelled")
+                raise LoadPathError(key, f"normal load becomes tensile (minimum {v:g} N); "
+                                         "adhesion is not modelled", "tensile")
         if isinstance(self.profile, Cylinder2D) and hi >= self.profile.max_load():
-            raise InputError("profile", "the cylinder's reference depth is too shallow for "
-                                        "the largest load: the plane approach needs a < 2d/e")
+            raise LoadPathError("profile.reference_depth", "too shallow for the largest "
+                                "load: the plane approach needs a < 2d/e", "reference_depth")
         if isinstance(self.profile, Tabulated) and hi > self.profile.P[-1] * (1 + 1e-12):
-            raise InputError("profile", f"table ends at {self.profile.P[-1]:g} N but the "
-                                        f"loads reach {hi:g} N")
+            raise LoadPathError("profile", f"table ends at {self.profile.P[-1]:g} N but the "
+                                           f"loads reach {hi:g} N", "table_end")
 
     @classmethod
     def harmonic(cls, profile, friction: float, compliance_ratio: float, *, P0: float,
@@ -252,8 +275,20 @@ class HalfspaceModel:
 
 def _positive(name: str, value) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(value) or not value > 0:
+            or not np.isfinite(value):
         raise InputError(name, f"must be a finite number > 0, got {value!r}")
+    _bound(name, value, ">", 0.0)
+
+
+_HOLDS = {">": np.greater, ">=": np.greater_equal, "<": np.less, "<=": np.less_equal}
+
+
+def _bound(name: str, value, sym: str, bound: float) -> None:
+    """Refuse the first entry of ``value`` not ``sym bound`` ("must be > 0, got -1")."""
+    arr = np.atleast_1d(np.asarray(value, dtype=float))
+    bad = ~_HOLDS[sym](arr, bound)
+    if np.any(bad):
+        raise InputError(name, f"must be {sym} {bound:g}, got {arr[bad][0]:g}")
 
 
 def _finite_array(name: str, value) -> np.ndarray:

@@ -33,6 +33,58 @@ __all__ = ["RodsCase", "RodsResult", "parse_case", "run_case", "solve_case", "so
 
 @dataclass
 class RodsCase:
+    """A validated two-rod case: system, excitation and solver settings.
+
+    Built from a case file by :func:`parse_case` (every field checked there, the keys of
+    docs/rods.md), or directly in Python (``examples/python_rods.py``); :func:`analyse`
+    solves it. The fields are taken as given: ``frequency_ratio`` and ``omega1`` are
+    reported, the solvers use ``exc.frequency``, so keep
+    ``exc.frequency == frequency_ratio * omega1``.
+
+    Parameters
+    ----------
+    rods : TwoRods
+        The rods (lengths, radii, E, ν, ρ), friction f, interface law, tangential interface
+        stiffness k_t (N/m³) and modal damping ratio ζ.
+    exc : Excitation
+        Drive rotation Θ_a sin Ωt (Θ_a rad, Ω rad/s) and axial force
+        F0 + F_a sin(Ωt + ψ) (N, rad).
+    frequency_ratio : float
+        Ω/ω1 (dimensionless), reported in the summary.
+    omega1 : float
+        ω1, lowest torsional natural frequency of the welded system with both outer ends
+        fixed (rad/s; :func:`slipcycle.rods.welded.omega1`), reported in the summary.
+    modes : int
+        Modes per rod of the modal model (≥ 0; :func:`slipcycle.rods.modal.modal_basis`).
+    rings : int
+        Rings of the ``distributed`` interface (≥ 1), also used by the rings model of the
+        regularisation study.
+    static_correction : bool
+        Residual flexibility of the truncated modes (mode-acceleration correction).
+    steps_per_cycle : int
+        K, time steps per period of the dynamic and quasi-static runs.
+    cycles : int
+        Largest number of cycles of the dynamic run to reach the periodic steady state.
+    steady_tol : float
+        Relative cycle-to-cycle change at which the steady state is accepted.
+    regularisation : bool
+        Whether :func:`analyse` runs :func:`slipcycle.rods.regularisation.
+        regularisation_study` (needs a finite k_t).
+    regularisation_points : int
+        Geometric amplitudes of that study (8 more are added in the rings' microslip range).
+    iwan_chi : float, optional
+        Segalman's exponent χ ∈ (−1, 2] of the ``iwan`` interface; None (with
+        ``iwan_beta``): χ and β are fitted to the rings (:func:`slipcycle.rods.interfaces.
+        fit_iwan`). Ignored by the other interfaces.
+    iwan_beta : float, optional
+        Segalman's β ≥ 0 (dimensionless), given together with ``iwan_chi``.
+
+    References
+    ----------
+    Segalman, D. J. (2005). A four-parameter Iwan model for lap-type joints. J. Appl. Mech.
+    72, 752–760 (χ, β).
+    """
+
     rods: TwoRods
     exc: Excitation
     frequency_ratio: float
@@ -168,6 +220,29 @@ def interface_bed(rc: RodsCase):
     The one place that turns the case's interface keys into a bed, used by ``slipcycle
     run``, ``slipcycle limits`` and the Python API alike; an Iwan element uses the given
     ``iwan_chi``/``iwan_beta`` (else the fit to the rings) at the mean normal force F0.
+
+    Parameters
+    ----------
+    rc : RodsCase
+        The case; its ``rods.interface``, ``rings``, ``iwan_chi``, ``iwan_beta`` and the
+        mean axial force ``exc.axial_force`` F0 (N) are used.
+
+    Returns
+    -------
+    bed : Bed
+        The interface as n Jenkins elements: stiffnesses ``kappa`` (n,) N m/rad and
+        capacities per unit normal force ``cap_unit`` (n,) m (:func:`slipcycle.rods.
+        interfaces.make_bed`; ``rings`` elements for ``distributed``, one for ``jenkins``,
+        ``coulomb`` and ``welded``, the discretised element for ``iwan``).
+    iwan : SegalmanIwan or None
+        For ``iwan``: the element used, F_S = (2/3) f F0 a (N m), K_T = k_t J_a (N m/rad)
+        with the given or fitted χ and β; None for every other interface.
+
+    References
+    ----------
+    Segalman, D. J. (2005). A four-parameter Iwan model for lap-type joints. J. Appl. Mech.
+    72, 752–760. Iwan, W. D. (1966). A distributed-element model for hysteresis and its
+    steady-state dynamic response. J. Appl. Mech. 33, 893–900.
     """
     from slipcycle.rods.interfaces import SegalmanIwan, gross_slip_torque, iwan_bed, make_bed
 
@@ -183,7 +258,57 @@ def interface_bed(rc: RodsCase):
 
 
 def analyse(rc: RodsCase) -> dict:
-    """Dynamic steady state, quasi-static loop, slip inception and regularisation study."""
+    """Dynamic steady state, quasi-static loop, slip inception and regularisation study.
+
+    Everything ``slipcycle run`` reports for a rods case (docs/rods.md): the periodic
+    steady state of the modal model (:func:`slipcycle.rods.modal.steady_state`), the
+    quasi-static loop of the massless rods (:func:`slipcycle.rods.quasistatic.
+    quasi_static_loop`), both with the bed of :func:`interface_bed`, and the drive
+    amplitudes at which the stuck interface starts to slip: the smallest Θ_a for which the
+    stuck torque per unit Θ_a over the cycle (dynamic: the modal frequency response with
+    the bed's stuck stiffness k0; quasi-static: sin Ωt/(C_r + 1/k0), C_r the rods'
+    compliance) reaches the bed's first-slip torque at the normal force N(t) ≥ 0 (dynamic:
+    the exact closed-contact axial response; quasi-static: F(t)).
+
+    Parameters
+    ----------
+    rc : RodsCase
+        The validated case (system, excitation, modes, rings, steps per cycle, cycle limit,
+        tolerance, regularisation settings).
+
+    Returns
+    -------
+    dict
+        ``dyn`` : DynamicResult
+            Last (steady) cycle of the dynamic run: t, Θ, T, δ, N histories of shape
+            (K + 1,) (s, rad, N m, rad, N), friction dissipation, damping loss and input
+            work per cycle (J), cycles run, ``converged``, residual.
+        ``qs`` : DynamicResult
+            The quasi-static loop, same fields.
+        ``bed`` : Bed
+            The interface bed (:func:`interface_bed`).
+        ``basis`` : ModalBasis
+            The modal model, ``rc.modes`` modes per rod.
+        ``iwan`` : SegalmanIwan or None
+            The Iwan element used (``iwan`` interface only).
+        ``inception_dyn``, ``inception_qs`` : float
+            Slip-inception drive amplitude Θ_a, dynamic and quasi-static (rad; inf if the
+            interface never slips).
+        ``natural`` : (5,) ndarray
+            Lowest five torsional natural frequencies of the welded system with both outer
+            ends fixed (rad/s).
+        ``reg`` : dict or None
+            :func:`slipcycle.rods.regularisation.regularisation_study` (None when
+            ``rc.regularisation`` is false).
+
+    References
+    ----------
+    Nigam, N. C. & Jennings, P. C. (1969). Calculation of response spectra from
+    strong-motion earthquake records. Bull. Seismol. Soc. Am. 59, 909–922 (the modal step).
+    Graff, K. F. (1975). Wave Motion in Elastic Solids, §2.2 (torsional modes of rods).
+    Johnson, K. L. (1985). Contact Mechanics, §7.3 (slip of a flat circular contact in
+    torsion).
+    """
     from slipcycle.rods.modal import modal_basis, modal_frf, steady_state
     from slipcycle.rods.quasistatic import (
         qs_normal_force,

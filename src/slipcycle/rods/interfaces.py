@@ -427,13 +427,35 @@ def fit_iwan(rods: TwoRods, N: float, points: int = 40) -> tuple[SegalmanIwan, f
         + Σ_k [(T_iwan(δ_k) − T_dist(δ_k)) / F_S]²
 
     over torque amplitudes T_k ∈ [0.05, 0.97] F_S (the dissipation curve) and rotations
-    δ_k ∈ [0, δ_dist(T_max)] (the stiffness / backbone curve), both with closed forms.
+    δ_k ∈ [0, δ_dist(T_max)] (the stiffness / backbone curve), both with closed forms
+    (:func:`distributed_dissipation`, :func:`distributed_backbone`; Segalman's closed
+    forms :meth:`SegalmanIwan.dissipation_at_torque`, :meth:`SegalmanIwan.backbone`).
+    χ is bounded to [−0.95, 2] and β to [1e-6, 1e3]; the best of three starting points
+    is kept.
+
+    Parameters
+    ----------
+    rods : TwoRods
+        Friction f, contact radius a (m) and a finite tangential interface stiffness k_t
+        (N/m³) of the rings; ``rods.interface`` is not used.
+    N : float
+        Normal force (N), > 0, at which the element is fitted (the mean axial force F0).
+    points : int
+        Number of samples T_k and of samples δ_k (one sum each).
 
     Returns
     -------
     iwan : SegalmanIwan
+        F_S = (2/3) f N a (N m), K_T = k_t J_a = k_t π a⁴/2 (N m/rad), the fitted χ and β
+        (dimensionless).
     rms : float
-        Root-mean-square residual at the optimum.
+        Root-mean-square of the normalised residuals at the optimum (dimensionless).
+
+    References
+    ----------
+    Segalman, D. J. (2005). A four-parameter Iwan model for lap-type joints. J. Appl. Mech.
+    72, 752–760 (the element's backbone and dissipation). Johnson, K. L. (1985). Contact
+    Mechanics, §7.3 (the rings: torsion of a flat circular contact under uniform pressure).
     """
     from scipy.optimize import least_squares
 
@@ -674,5 +696,48 @@ def make_bed(rods: TwoRods, N_ref: float, rings: int = 100, iwan: SegalmanIwan |
              ) -> Bed:
     """The bed of ``rods.interface`` (``rings`` rings for ``distributed``; an Iwan element
     is discretised to its accuracy target, independent of ``rings``):
-    ``interface_law(rods.interface, rings=rings, iwan=iwan).bed(rods, N_ref)``."""
+    ``interface_law(rods.interface, rings=rings, iwan=iwan).bed(rods, N_ref)``.
+
+    Every law is a bed of Jenkins elements, t_i ← clip(t_i + κ_i Δδ, −ĉ_i N, ĉ_i N),
+    T = Σ t_i (module docstring): rings κ_i = k_t π(ρ_b⁴ − ρ_a⁴)/2,
+    ĉ_i = (2f/3a²)(ρ_b³ − ρ_a³) (``distributed``); one element κ = k_t J_a,
+    ĉ = (2/3) f a (``jenkins``); rigid–plastic with ĉ = (2/3) f a (``coulomb``); the
+    discretised Segalman element with capacities divided by ``N_ref`` (``iwan``); rigid
+    with infinite capacity (``welded``).
+
+    Parameters
+    ----------
+    rods : TwoRods
+        The interface law (``rods.interface``), friction f, contact radius a (m) and
+        tangential interface stiffness k_t (N/m³).
+    N_ref : float
+        Reference normal force (N), > 0 for ``iwan``: the Iwan element is fitted there
+        (when ``iwan`` is None) and its capacities scale with N(t)/N_ref. Not used by the
+        other laws.
+    rings : int
+        Number of rings of equal width of ``distributed`` (≥ 1).
+    iwan : SegalmanIwan, optional
+        Parameters of the ``iwan`` law; None: fitted to the rings at ``N_ref``
+        (:func:`fit_iwan`).
+
+    Returns
+    -------
+    Bed
+        ``kind`` (the interface name), ``kappa`` (n,) element stiffnesses (N m/rad; inf
+        for a rigid law), ``cap_unit`` (n,) capacities per unit normal force (m), and
+        ``rigid``; n = ``rings`` (``distributed``), 1 (``jenkins``, ``coulomb``,
+        ``welded``) or the discretised element count (``iwan``, :func:`segalman_density`).
+
+    Raises
+    ------
+    ValueError
+        ``rings`` < 1 for ``distributed``.
+
+    References
+    ----------
+    Iwan, W. D. (1966). A distributed-element model for hysteresis and its steady-state
+    dynamic response. J. Appl. Mech. 33, 893–900. Segalman, D. J. (2005). A four-parameter
+    Iwan model for lap-type joints. J. Appl. Mech. 72, 752–760. Johnson, K. L. (1985).
+    Contact Mechanics, §7.3.
+    """
     return interface_law(rods.interface, rings=rings, iwan=iwan).bed(rods, N_ref)

@@ -27,10 +27,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
+from slipcycle.io.results import RunOutputs
 from slipcycle.io.sizes import check_memory
+from slipcycle.result import StudyResult
 from slipcycle.rods.interfaces import Bed, Welded, gross_slip_torque, interface_law
 from slipcycle.rods.modal import ModalBasis, Propagator, modal_basis, steady_state
 from slipcycle.rods.model import Excitation, TwoRods
@@ -38,7 +41,8 @@ from slipcycle.rods.quasistatic import quasi_static_loop
 from slipcycle.rods.welded import natural_frequencies, omega1
 
 __all__ = ["Study", "Point", "limit_frequency", "regime_map", "position_map",
-           "gross_slip_amplitude", "LimitsCase", "parse_limits", "run_limits",
+           "gross_slip_amplitude", "LimitsCase", "parse_limits", "run_limits", "limits_study",
+           "LimitsResult", "make_study",
            "POLE_RTOL", "LIMITS_UNITS", "LIMITS_FLAGS"]
 
 #: a frequency within this relative distance of an undamped natural frequency is a pole
@@ -84,7 +88,29 @@ class Point:
 
 @dataclass
 class Study:
-    """One system and the numerical settings shared by every point of a sweep."""
+    """One system and the numerical settings shared by every point of a sweep.
+
+    Caches what the points share (ω1, pole frequencies, the quasi-static loop per
+    amplitude, the modal propagator of the last frequency); :meth:`solve` gives one point.
+
+    Parameters
+    ----------
+    rods : TwoRods
+        The two rods and their interface.
+    exc : Excitation
+        Drive: rotation amplitude Θa [rad], frequency Ω [rad/s] (set per point) and
+        axial force N [N].
+    bed : Bed
+        Interface bed of Jenkins elements (:func:`slipcycle.rods.case.interface_bed`).
+    basis : ModalBasis
+        Modal basis of the rods (:func:`~slipcycle.rods.modal.modal_basis`).
+    steps_per_cycle : int
+        Time steps per load cycle.
+    max_cycles : int
+        Cycles allowed to reach the periodic steady state.
+    tol : float
+        Relative steadiness tolerance of the dynamic steady state [1].
+    """
 
     rods: TwoRods
     exc: Excitation
@@ -212,6 +238,20 @@ def limit_frequency(study: Study, tolerance: float = 0.05, ratios=None,
                     progress: bool = False) -> dict:
     """Limit frequency ratios for the torque and for the dissipation at the case amplitude.
 
+    The limit is the first Ω/ω1 of the sweep where |T_dyn/T_qs − 1| > ε (resp. the
+    dissipation ratio), refined by bisection in log Ω.
+
+    Parameters
+    ----------
+    study : Study
+        The system and settings (:func:`make_study`); its excitation amplitude is used.
+    tolerance : float
+        Relative tolerance ε on the ratios [1].
+    ratios : array_like, shape (F,), optional
+        Increasing frequency ratios Ω/ω1 [1] (default 40 geometric values 0.01…3).
+    progress : bool
+        Show a progress bar.
+
     Returns
     -------
     dict
@@ -259,9 +299,28 @@ def _bar(total, desc, progress):
 def regime_map(study: Study, ratios, amplitude_factors, progress: bool = True) -> dict:
     """T_dyn/T_qs and D_dyn/D_qs over Ω/ω1 × Θa/Θg, shape (len(ratios), len(factors)).
 
-    ``converged`` (same shape, bool) is False at points without a periodic steady state
-    (and at poles, also listed in ``pole``); ``resonances`` are the stuck system's natural
-    frequency ratios in range.
+    Θg (:func:`gross_slip_amplitude`) is the amplitude at which a stuck interface would
+    carry the gross-slip torque.
+
+    Parameters
+    ----------
+    study : Study
+        The system and settings (:func:`make_study`).
+    ratios : array_like, shape (F,)
+        Frequency ratios Ω/ω1 [1].
+    amplitude_factors : array_like, shape (A,)
+        Amplitude ratios Θa/Θg [1].
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    dict
+        ``ratios`` (F,), ``amplitude_factors`` (A,), ``theta_gross`` Θg [rad],
+        ``torque_ratio`` and ``dissipation_ratio`` (F, A) [1] (NaN at poles and where the
+        quasi-static loop does not dissipate), ``converged`` (F, A) bool (False at points
+        without a periodic steady state and at poles), ``pole`` (F, A) bool,
+        ``resonances``: the stuck system's natural frequency ratios in range [1].
     """
     ratios = np.asarray(ratios, dtype=float)
     fac = np.asarray(amplitude_factors, dtype=float)
@@ -288,7 +347,31 @@ def regime_map(study: Study, ratios, amplitude_factors, progress: bool = True) -
 
 def position_map(study: Study, fractions, ratios, amplitude: float | None = None,
                  modes: int | None = None, progress: bool = True) -> dict:
-    """T_dyn/T_qs and D_dyn/D_qs over L1/(L1 + L2) × Ω/ω1 (shape (len(fractions), len(ratios)))."""
+    """T_dyn/T_qs and D_dyn/D_qs over L1/(L1 + L2) × Ω/ω1.
+
+    The total length and everything else are fixed; each geometry uses its own ω1.
+
+    Parameters
+    ----------
+    study : Study
+        The system and settings (:func:`make_study`).
+    fractions : array_like, shape (P,)
+        Interface positions L1/(L1 + L2) [1], in (0, 1).
+    ratios : array_like, shape (F,)
+        Frequency ratios Ω/ω1 [1], ω1 of each geometry.
+    amplitude : float, optional
+        Drive amplitude Θa [rad] (default the study's).
+    modes : int, optional
+        Modes of each geometry's basis (default the study's).
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    dict
+        ``fractions`` (P,), ``ratios`` (F,), ``omega1`` (P,) [rad/s], ``torque_ratio`` and
+        ``dissipation_ratio`` (P, F) [1], ``converged`` and ``pole`` (P, F) bool.
+    """
     from dataclasses import replace
 
     fr = np.asarray(fractions, dtype=float)
@@ -400,8 +483,22 @@ LIMITS_FLAGS = {
 
 
 def make_study(rc) -> tuple[Study, object]:
-    """The study of a validated rods case, with ``slipcycle run``'s bed and settings;
-    also the Iwan parameters used (None for other interfaces)."""
+    """The :class:`Study` of a validated rods case, with ``slipcycle run``'s bed and settings.
+
+    Parameters
+    ----------
+    rc : RodsCase
+        A validated rods case (:func:`slipcycle.rods.case.parse_case`).
+
+    Returns
+    -------
+    study : Study
+        The rods, excitation, interface bed (:func:`slipcycle.rods.case.interface_bed`),
+        modal basis and the case's steps per cycle, cycle limit and steadiness tolerance.
+    iwan : SegalmanIwan or None
+        The Iwan parameters used (F_S [N m], K_T [N m/rad], χ, β); None for other
+        interfaces.
+    """
     from slipcycle.rods.case import interface_bed
 
     bed, iw = interface_bed(rc)
@@ -410,75 +507,205 @@ def make_study(rc) -> tuple[Study, object]:
                  rc.steady_tol), iw
 
 
-def run_limits(lc: LimitsCase, maps: bool = True, progress: bool = False):
-    """Limit frequency (and maps) of a validated limits case → :class:`RunOutputs`."""
+def run_limits(lc: LimitsCase, maps: bool = True, progress: bool = False) -> RunOutputs:
+    """What ``slipcycle limits`` writes: ``limits_study(lc, maps, progress).to_outputs()``.
+
+    Parameters
+    ----------
+    lc, maps, progress
+        See :func:`limits_study`.
+
+    Returns
+    -------
+    RunOutputs
+    """
+    return limits_study(lc, maps=maps, progress=progress).to_outputs()
+
+
+def limits_study(lc: LimitsCase, maps: bool = True, progress: bool = False) -> LimitsResult:
+    """Limit frequency of the quasi-static analysis (and the regime maps) of a limits case.
+
+    Parameters
+    ----------
+    lc : LimitsCase
+        A validated limits case (:func:`parse_limits`).
+    maps : bool
+        Also compute the regime map (Ω/ω1 × Θa/Θg) and the position map
+        (L1/(L1 + L2) × Ω/ω1).
+    progress : bool
+        Show progress bars.
+
+    Returns
+    -------
+    LimitsResult
+        Its ``to_outputs()`` is what ``slipcycle limits`` writes.
+    """
     import time
 
-    import xarray as xr
-
-    from slipcycle.io import RunOutputs
-    from slipcycle.plot import rods as plots
-
-    rc, tol, ratios = lc.rc, lc.tolerance, lc.ratios
-    study, iw = make_study(rc)
+    study, iw = make_study(lc.rc)
     t0 = time.perf_counter()
-    lim = limit_frequency(study, tol, ratios, progress=progress)
+    lim = limit_frequency(study, lc.tolerance, lc.ratios, progress=progress)
     t1 = time.perf_counter()
-    summary = {
-        "model": "rods",
-        "analysis": "limits",
-        "tolerance": tol,
-        "interface": rc.rods.interface,
-        "omega1": study.omega1,
-        "rotation_amplitude": rc.exc.rotation_amplitude,
-        "qs_limit_frequency_ratio": lim["qs_limit_frequency_ratio"],
-        "qs_limit_frequency_ratio_status": lim["qs_limit_frequency_ratio_status"],
-        "qs_limit_frequency": lim["qs_limit_frequency_ratio"] * study.omega1,
-        "qs_limit_frequency_ratio_dissipation": lim["qs_limit_frequency_ratio_dissipation"],
-        "qs_limit_frequency_ratio_dissipation_status":
-            lim["qs_limit_frequency_ratio_dissipation_status"],
-        "poles_frequency_ratio": lim["poles"],
-        "dissipation_per_cycle": None,
-        "sweep_points_not_converged": int(np.sum(~lim["converged"] & ~lim["pole"])),
-        "sweep_points_at_pole": int(np.sum(lim["pole"])),
-        "wall_time_sweep_s": t1 - t0,
-    }
-    if iw is not None:
-        summary["iwan"] = {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi, "beta": iw.beta,
-                           "elements": study.bed.size}
-    one = {"units": "1"}
-    fdim = "frequency_ratio"
-    ds = xr.Dataset(
-        {"torque_ratio": (fdim, lim["torque_ratio"], one),
-         "dissipation_ratio": (fdim, lim["dissipation_ratio"], one),
-         "T_dyn_max": (fdim, lim["T_dyn"], {"units": "N m"}),
-         "T_qs_max": (fdim, lim["T_qs"], {"units": "N m"}),
-         "dissipation_per_cycle": (fdim, lim["D_dyn"], {"units": "J"}),
-         "dissipation_per_cycle_qs": (fdim, lim["D_qs"], {"units": "J"}),
-         "converged": (fdim, lim["converged"], one),
-         "pole": (fdim, lim["pole"], one)},
-        coords={fdim: (fdim, ratios, one)})
-    figures = {"limit_frequency": lambda: plots.limit_curve(lim, tol)}
+    m = pm = None
+    t2 = t3 = t1
     if maps:
-        m = regime_map(study, ratios, lc.amplitude_ratios, progress=progress)
+        m = regime_map(study, lc.ratios, lc.amplitude_ratios, progress=progress)
         t2 = time.perf_counter()
-        pr = np.geomspace(ratios.min(), ratios.max(), lc.position_frequencies)
+        pr = np.geomspace(lc.ratios.min(), lc.ratios.max(), lc.position_frequencies)
         pm = position_map(study, lc.positions, pr, progress=progress)
         t3 = time.perf_counter()
-        summary.update({
-            "map_shape": list(m["torque_ratio"].shape),
-            "map_points_not_converged": int(np.sum(~m["converged"])),
-            "position_map_points_not_converged": int(np.sum(~pm["converged"])),
-            "wall_time_map_s": t2 - t1,
-            "wall_time_position_map_s": t3 - t2,
-            "theta_gross": m["theta_gross"],
-            "resonances_frequency_ratio": m["resonances"],
-            "position_omega1": pm["omega1"],
-        })
+    return LimitsResult(
+        wall_time_s=t3 - t0, tolerance=lc.tolerance, interface=lc.rc.rods.interface,
+        omega1=study.omega1, rotation_amplitude=lc.rc.exc.rotation_amplitude, sweep=lim,
+        iwan=None if iw is None else {"F_S": iw.F_S, "K_T": iw.K_T, "chi": iw.chi,
+                                      "beta": iw.beta, "elements": study.bed.size},
+        wall_time_sweep_s=t1 - t0, regime=m, positions=pm, wall_time_map_s=t2 - t1,
+        wall_time_position_map_s=t3 - t2)
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class LimitsResult(StudyResult):
+    """Limit frequency of the quasi-static analysis and regime maps (``slipcycle limits``).
+
+    Attributes
+    ----------
+    wall_time_s : float
+        Wall time of the sweep and the maps [s].
+    tolerance : float
+        Relative tolerance ε on T_dyn/T_qs and D_dyn/D_qs [1].
+    interface : str
+        Interface law of the case.
+    omega1 : float
+        First natural frequency ω1 of the stuck system [rad/s].
+    rotation_amplitude : float
+        Drive amplitude Θa of the case [rad].
+    sweep : dict
+        :func:`limit_frequency` at the case amplitude (arrays over Ω/ω1, the limits and
+        their status).
+    iwan : dict or None
+        Iwan parameters used (F_S [N m], K_T [N m/rad], chi, beta, elements).
+    wall_time_sweep_s : float
+        Wall time of the frequency sweep [s].
+    regime, positions : dict or None
+        :func:`regime_map` and :func:`position_map` (None without maps).
+    wall_time_map_s, wall_time_position_map_s : float
+        Wall times of the two maps [s] (0 without maps).
+    """
+
+    model: ClassVar[str] = "rods"
+    analysis: ClassVar[str] = "limits"
+    FLAGS: ClassVar[dict] = LIMITS_FLAGS
+
+    tolerance: float
+    interface: str
+    omega1: float
+    rotation_amplitude: float
+    sweep: dict
+    iwan: dict | None
+    wall_time_sweep_s: float
+    regime: dict | None = None
+    positions: dict | None = None
+    wall_time_map_s: float = 0.0
+    wall_time_position_map_s: float = 0.0
+
+    @property
+    def qs_limit_frequency_ratio(self) -> float:
+        """Ω/ω1 below which |T_dyn/T_qs − 1| ≤ ε (see its ``_status``) [1]."""
+        return self.sweep["qs_limit_frequency_ratio"]
+
+    def headline(self) -> list[tuple]:
+        """ω1, the two limit frequency ratios with their status, and the wall time."""
+        lim = self.sweep
+        return [("omega1", self.omega1, "rad/s"),
+                ("qs_limit_frequency_ratio", lim["qs_limit_frequency_ratio"], "1"),
+                ("status", lim["qs_limit_frequency_ratio_status"], ""),
+                ("qs_limit_frequency_ratio_dissipation",
+                 lim["qs_limit_frequency_ratio_dissipation"], "1"),
+                ("status_dissipation", lim["qs_limit_frequency_ratio_dissipation_status"], ""),
+                ("wall_time_s", self.wall_time_s, "s")]
+
+    def summary(self) -> dict:
+        """``summary.json`` of ``slipcycle limits`` (units: :data:`LIMITS_UNITS`).
+
+        Returns
+        -------
+        dict
+            ``omega1`` [rad/s], ``qs_limit_frequency_ratio`` and its status,
+            ``qs_limit_frequency`` [rad/s], the same for the dissipation, poles, points
+            not converged, wall times [s], ``iwan``, with maps their shapes, points not
+            converged, ``theta_gross`` [rad], resonances and ``position_omega1`` [rad/s];
+            ``units``.
+        """
+        lim = self.sweep
+        summary = {
+            "model": "rods",
+            "analysis": "limits",
+            "tolerance": self.tolerance,
+            "interface": self.interface,
+            "omega1": self.omega1,
+            "rotation_amplitude": self.rotation_amplitude,
+            "qs_limit_frequency_ratio": lim["qs_limit_frequency_ratio"],
+            "qs_limit_frequency_ratio_status": lim["qs_limit_frequency_ratio_status"],
+            "qs_limit_frequency": lim["qs_limit_frequency_ratio"] * self.omega1,
+            "qs_limit_frequency_ratio_dissipation":
+                lim["qs_limit_frequency_ratio_dissipation"],
+            "qs_limit_frequency_ratio_dissipation_status":
+                lim["qs_limit_frequency_ratio_dissipation_status"],
+            "poles_frequency_ratio": lim["poles"],
+            "dissipation_per_cycle": None,
+            "sweep_points_not_converged": int(np.sum(~lim["converged"] & ~lim["pole"])),
+            "sweep_points_at_pole": int(np.sum(lim["pole"])),
+            "wall_time_sweep_s": self.wall_time_sweep_s,
+        }
+        if self.iwan is not None:
+            summary["iwan"] = dict(self.iwan)
+        m, pm = self.regime, self.positions
+        if m is not None:
+            summary.update({
+                "map_shape": list(m["torque_ratio"].shape),
+                "map_points_not_converged": int(np.sum(~m["converged"])),
+                "position_map_points_not_converged": int(np.sum(~pm["converged"])),
+                "wall_time_map_s": self.wall_time_map_s,
+                "wall_time_position_map_s": self.wall_time_position_map_s,
+                "theta_gross": m["theta_gross"],
+                "resonances_frequency_ratio": m["resonances"],
+                "position_omega1": pm["omega1"],
+            })
+        summary["units"] = {k: v for k, v in LIMITS_UNITS.items()
+                            if k.split(".")[0] in summary}
+        return summary
+
+    def to_dataset(self):
+        """Ratios, maximum torques [N m], dissipation [J], ``converged`` and ``pole`` over
+        Ω/ω1; with maps, the ratios and ``converged`` over (map_frequency_ratio,
+        amplitude_ratio) and (position, position_frequency_ratio).
+
+        The only place the Dataset of a limits study is built.
+
+        Returns
+        -------
+        xarray.Dataset
+        """
+        import xarray as xr
+
+        lim, one, fdim = self.sweep, {"units": "1"}, "frequency_ratio"
+        ds = xr.Dataset(
+            {"torque_ratio": (fdim, lim["torque_ratio"], one),
+             "dissipation_ratio": (fdim, lim["dissipation_ratio"], one),
+             "T_dyn_max": (fdim, lim["T_dyn"], {"units": "N m"}),
+             "T_qs_max": (fdim, lim["T_qs"], {"units": "N m"}),
+             "dissipation_per_cycle": (fdim, lim["D_dyn"], {"units": "J"}),
+             "dissipation_per_cycle_qs": (fdim, lim["D_qs"], {"units": "J"}),
+             "converged": (fdim, lim["converged"], one),
+             "pole": (fdim, lim["pole"], one)},
+            coords={fdim: (fdim, lim["ratios"], one)})
+        m, pm = self.regime, self.positions
+        if m is None:
+            return ds
         ds = ds.assign_coords(
-            map_frequency_ratio=("map_frequency_ratio", ratios, one),
-            amplitude_ratio=("amplitude_ratio", lc.amplitude_ratios, one),
-            position=("position", lc.positions, one),
+            map_frequency_ratio=("map_frequency_ratio", m["ratios"], one),
+            amplitude_ratio=("amplitude_ratio", m["amplitude_factors"], one),
+            position=("position", pm["fractions"], one),
             position_frequency_ratio=("position_frequency_ratio", pm["ratios"], one))
         dims = ("map_frequency_ratio", "amplitude_ratio")
         ds["map_torque_ratio"] = (dims, m["torque_ratio"], one)
@@ -488,7 +715,20 @@ def run_limits(lc: LimitsCase, maps: bool = True, progress: bool = False):
         ds["position_torque_ratio"] = (pd, pm["torque_ratio"], one)
         ds["position_dissipation_ratio"] = (pd, pm["dissipation_ratio"], one)
         ds["position_converged"] = (pd, pm["converged"], one)
-        figures["regime_map"] = lambda: plots.regime_map(m, tol)
-        figures["position_map"] = lambda: plots.position_map(pm, tol)
-    summary["units"] = {k: v for k, v in LIMITS_UNITS.items() if k.split(".")[0] in summary}
-    return RunOutputs(summary=summary, dataset=ds, figures=figures, flags=dict(LIMITS_FLAGS))
+        return ds
+
+    def figures(self, dataset=None) -> dict:
+        """``limit_frequency`` and, with maps, ``regime_map`` and ``position_map``.
+
+        Returns
+        -------
+        dict of str to callable
+        """
+        from slipcycle.plot import rods as plots
+
+        tol = self.tolerance
+        figures = {"limit_frequency": lambda: plots.limit_curve(self.sweep, tol)}
+        if self.regime is not None:
+            figures["regime_map"] = lambda: plots.regime_map(self.regime, tol)
+            figures["position_map"] = lambda: plots.position_map(self.positions, tol)
+        return figures

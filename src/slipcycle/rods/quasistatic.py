@@ -51,6 +51,41 @@ def quasi_static_loop(rods: TwoRods, exc: Excitation, bed: Bed, steps_per_cycle:
     """Steady quasi-static hysteresis loop, starting from the unloaded, unslipped state.
 
     The excitation frequency only labels time; the answer does not depend on it.
+    Inertia is neglected: the rods are torsional springs in series with the interface,
+    δ = Θ − C_r T, C_r = L1/(G1 J1) + L2/(G2 J2), and the normal force is the applied
+    axial force, N(t) = F0 + F_a sin(Ωt + ψ) (clipped at 0 by the bed). The loop is run
+    by the dynamic solver's exact step with no modes and the full static compliance
+    (:func:`quasi_static_basis`, :func:`slipcycle.rods.modal.steady_state` with
+    tolerance 1e-9 and no acceleration), so quasi-static and dynamic answers differ only
+    by inertia.
+
+    Parameters
+    ----------
+    rods : TwoRods
+        The rods (their static torsional compliance C_r, rad/(N m)).
+    exc : Excitation
+        Drive amplitude Θ_a (rad), axial force F0, F_a (N) and phase ψ (rad); Ω (rad/s)
+        only sets the time axis.
+    bed : Bed
+        The interface law (:func:`slipcycle.rods.interfaces.make_bed`).
+    steps_per_cycle : int
+        K, steps per period.
+    max_cycles : int
+        Upper limit of cycles; reaching it is reported (``converged=False``).
+
+    Returns
+    -------
+    DynamicResult
+        The last cycle: ``t``, ``theta``, ``T``, ``delta``, ``N`` of shape (K + 1,) (s, rad,
+        N m, rad, N), friction ``dissipation`` per cycle (J), ``damping_loss`` (0),
+        ``input_work`` (J), ``cycles``, ``converged``, ``residual`` and
+        ``element_dissipation`` (n,) (J).
+
+    References
+    ----------
+    Iwan, W. D. (1966). A distributed-element model for hysteresis and its steady-state
+    dynamic response. J. Appl. Mech. 33, 893–900 (the loop of a bed of Jenkins elements).
+    Johnson, K. L. (1985). Contact Mechanics, §7.3 (torsion of a flat circular contact).
     """
     K = int(steps_per_cycle)
     tt = np.arange(K + 1) * exc.period / K

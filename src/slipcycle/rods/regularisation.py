@@ -44,12 +44,58 @@ def regularisation_study(rods: TwoRods, exc: Excitation, rings: int = 100,
     Amplitudes are Θ_a = s Θ_g with s ∈ [0.03, 30] (geometric, plus 8 points in the
     rings' microslip range 0.77–0.99) and Θ_g = T_g (C_r + 1/k_t J_a)
     the amplitude at which a stuck interface would carry the gross-slip torque T_g.
+    Each point is a :func:`~slipcycle.rods.quasistatic.quasi_static_loop` at constant
+    normal force F0 (the axial amplitude is set to 0). The slopes are least-squares
+    log–log fits (module docstring): ``slope_microslip`` of D against T* over the points
+    with D > 1e-9 max D and T* < 0.95 T_g, ``slope_macroslip`` of D against Θ_a over the
+    five largest amplitudes.
+
+    Parameters
+    ----------
+    rods : TwoRods
+        Friction f, contact radius a (m), rods' compliance C_r (rad/(N m)) and a finite
+        tangential interface stiffness k_t (N/m³; :func:`slipcycle.rods.case.parse_case`
+        switches the study off without one); all four models are built from them,
+        whatever ``rods.interface`` is.
+    exc : Excitation
+        Its mean axial force F0 (N) is the normal force; Θ_a is swept and F_a set to 0; Ω
+        (rad/s) only sets the time axis.
+    rings : int
+        Rings of the ``distributed`` model (≥ 1).
+    iwan : SegalmanIwan, optional
+        The ``iwan`` model; None: fitted to the rings at F0 (:func:`slipcycle.rods.
+        interfaces.fit_iwan`).
+    points : int
+        Geometric amplitudes s ∈ [0.03, 30]; with the 8 microslip points the study has
+        n ≤ ``points`` + 8 distinct amplitudes.
+    steps_per_cycle : int
+        K, steps per period of each quasi-static loop.
 
     Returns
     -------
     dict
-        ``amplitude`` (points,) rad; per model ``T_amp`` and ``dissipation`` (points,)
-        arrays (N m, J), ``slope_microslip`` and ``slope_macroslip``; ``iwan`` parameters.
+        ``amplitude`` : (n,) ndarray
+            Drive amplitudes Θ_a (rad), ascending.
+        ``gross_slip_torque`` : float
+            T_g = (2/3) f F0 a (N m).
+        ``theta_gross`` : float
+            Θ_g (rad).
+        ``iwan_params`` : dict
+            ``F_S`` (N m), ``K_T`` (N m/rad), ``chi``, ``beta`` of the Iwan model used.
+        ``distributed``, ``jenkins``, ``coulomb``, ``iwan`` : dict
+            Per model: ``T_amp`` (n,) torque amplitudes max|T| (N m), ``dissipation`` (n,)
+            per cycle (J, ≥ 0), ``slope_microslip`` and ``slope_macroslip`` (float, or None
+            where fewer than two points qualify or some macroslip point does not dissipate).
+        ``first_slip_torque`` : dict
+            Per model, the torque at which its first element slips at F0 (N m).
+        ``_beds`` : dict
+            Per model, the :class:`~slipcycle.rods.interfaces.Bed` used (internal).
+
+    References
+    ----------
+    Segalman, D. J. (2005). A four-parameter Iwan model for lap-type joints. J. Appl. Mech.
+    72, 752–760 (D ∝ T*^(3+χ)). Iwan, W. D. (1966). J. Appl. Mech. 33, 893–900. Johnson,
+    K. L. (1985). Contact Mechanics, §7.3 (the rings; slip inception at the rim).
     """
     N0 = exc.axial_force
     Tg = gross_slip_torque(rods.friction, N0, rods.contact_radius)

@@ -102,8 +102,32 @@ def _det(rods: TwoRods, Omega: float, k_int: float) -> float:
 def natural_frequencies(rods: TwoRods, count: int = 1, k_int: float = math.inf) -> np.ndarray:
     """Lowest ``count`` torsional natural frequencies with both outer ends fixed (rad/s).
 
-    Roots of φ(L2) for φ(−L1) = 0, located by a scan finer than the smallest travel time and
-    refined by Brent's method.
+    Roots in Ω of φ(L2) for φ(−L1) = 0 and a unit torque there, chained through rod 1, the
+    interface (a linear torsional spring ``k_int``, or welded) and rod 2 by the undamped
+    field transfer matrices of the module docstring. They are located by a scan in steps
+    of π/(400 τ), τ = L1/c1 + L2/c2 the torsional travel time through both rods, and refined
+    by Brent's method to a relative tolerance of about 1e-14.
+
+    Parameters
+    ----------
+    rods : TwoRods
+        Lengths L_j (m), G_j J_j (N m²) and torsional wave speeds c_j (m/s) of both rods.
+        ``rods.interface`` and ``rods.damping_ratio`` are not used (the interface is
+        ``k_int``, the system undamped).
+    count : int
+        Number of frequencies, ≥ 1.
+    k_int : float
+        Linear interface torsional stiffness (N m/rad); inf for a welded interface.
+
+    Returns
+    -------
+    (count,) ndarray
+        The natural frequencies in ascending order (rad/s).
+
+    References
+    ----------
+    Graff, K. F. (1975). Wave Motion in Elastic Solids, §1.4 and §2.2. Pestel, E. C. &
+    Leckie, F. A. (1963). Matrix Methods in Elastomechanics, McGraw-Hill.
     """
     r1, r2 = rods.rods
     tau = r1.length / r1.c_torsion + r2.length / r2.c_torsion
@@ -124,7 +148,27 @@ def natural_frequencies(rods: TwoRods, count: int = 1, k_int: float = math.inf) 
 
 
 def omega1(rods: TwoRods) -> float:
-    """ω1: lowest torsional natural frequency of the welded system, outer ends fixed (rad/s)."""
+    """ω1: lowest torsional natural frequency of the welded system, outer ends fixed (rad/s).
+
+    The frequency scale of the two-rod problem (Ω/ω1 in case files and maps):
+    ``natural_frequencies(rods.with_(interface="welded"), 1)[0]``.
+
+    Parameters
+    ----------
+    rods : TwoRods
+        Lengths L_j (m), G_j J_j (N m²) and torsional wave speeds c_j (m/s) of both rods;
+        the interface law and damping are not used (welded, undamped).
+
+    Returns
+    -------
+    float
+        ω1 (rad/s).
+
+    References
+    ----------
+    Graff, K. F. (1975). Wave Motion in Elastic Solids, §2.2. Pestel, E. C. & Leckie, F. A.
+    (1963). Matrix Methods in Elastomechanics, McGraw-Hill.
+    """
     return float(natural_frequencies(rods.with_(interface="welded"), 1)[0])
 
 
