@@ -43,6 +43,7 @@ a sequential algorithm (the λ3/λ4 bisection of ``slipcycle shakedown``).
 from __future__ import annotations
 
 import copy
+import gc
 import hashlib
 import itertools
 import json
@@ -774,6 +775,12 @@ def _acquire(path: Path) -> _Lock:
     raise SweepError("--out", f"could not lock the sweep store {path}")  # pragma: no cover
 
 
+#: a Dask scheduler address: protocol://host:port (host a name, IPv4 or [IPv6]) or inproc://
+_SCHEDULER_ADDRESS = re.compile(
+    r"(?:(?:tcp|tls|ucx|ws|wss)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):\d{1,5}"
+    r"|inproc://\S+")
+
+
 def connect_scheduler(address, timeout: float | None = None):
     """A Dask client for ``address`` (or ``address`` itself if it is a client).
 
@@ -789,12 +796,18 @@ def connect_scheduler(address, timeout: float | None = None):
     """
     if hasattr(address, "submit"):
         return address, False
+    text = str(address).strip()
+    # refuse a malformed address before a Client exists: a Client that fails in its
+    # constructor can outlive the failure and be met again by later work in this process
+    if not _SCHEDULER_ADDRESS.fullmatch(text):
+        raise SweepError("--scheduler", f"{text!r} is not a scheduler address (expected "
+                         "tcp://host:port, e.g. tcp://127.0.0.1:8786)")
     import dask
     from distributed import Client
 
-    text = str(address).strip()
     timeout = SCHEDULER_TIMEOUT_S if timeout is None else timeout
     saved = copy.deepcopy(dask.config.config)
+    reason = None
     try:
         client = Client(text, timeout=timeout)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:
@@ -803,8 +816,12 @@ def connect_scheduler(address, timeout: float | None = None):
         dask.config.config.clear()
         dask.config.config.update(saved)
         reason = " ".join(str(exc).split()) or type(exc).__name__
+    if reason is not None:
+        # the failed Client is held only by the traceback's reference cycle: collect it
+        # now, so that no later work in this process can find it as the default client
+        gc.collect()
         raise SweepError("--scheduler", f"cannot connect to a Dask scheduler at {text!r}: "
-                         f"{reason}") from None
+                         f"{reason}")
     return client, True
 
 
