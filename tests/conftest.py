@@ -38,3 +38,77 @@ def write_case(tmp_path):
         return path
 
     return _write
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def _toml_value(value) -> str:
+    """TOML text of a Python value (bool, int, float, str, list)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"no TOML text for {value!r}")
+
+
+def _strip_comment(line: str) -> str:
+    """``line`` without its ``# ...`` comment (a ``#`` inside a quoted string is kept)."""
+    quote = None
+    for i, ch in enumerate(line):
+        if quote:
+            if ch == quote:
+                quote = None
+        elif ch in "\"'":
+            quote = ch
+        elif ch == "#":
+            return line[:i].rstrip()
+    return line.rstrip()
+
+
+def case_text(name: str, **tables) -> str:
+    """The text of ``examples/<name>.toml`` without comments, with per-table overrides.
+
+    Each keyword names a table (``loading={"Q1": 80.0}``): a key already there has its
+    value replaced in place, a key given as ``None`` is removed, a new key is added right
+    after the key named before it in the overrides (when that key is in the table) or else
+    at the end of the table; a table not in the example is added at the end, in keyword
+    order, and a table given as ``None`` is removed whole. Values are Python values
+    (bool, int, float, str, list) written as TOML.
+    """
+    text = (EXAMPLES / f"{name}.toml").read_text(encoding="utf-8")
+    sections: list[tuple[str, list[str]]] = [("", [])]  # (table name, its lines)
+    for line in filter(None, map(_strip_comment, text.splitlines())):
+        if line.startswith("["):
+            sections.append((line.strip("[] "), [line]))
+        else:
+            sections[-1][1].append(line)
+    known = {table for table, _ in sections}
+    sections += [(table, [f"[{table}]"]) for table, edits in tables.items()
+                 if table not in known and edits is not None]
+    out: list[str] = []
+    for table, body in sections:
+        if table in tables and tables[table] is None:
+            continue
+        keyed = [(line.split("=", 1)[0].strip() if "=" in line else None, line)
+                 for line in body]
+        previous = None
+        for key, value in tables.get(table, {}).items():
+            at = [k for k, _ in keyed].index
+            line = None if value is None else f"{key} = {_toml_value(value)}"
+            if key in (k for k, _ in keyed):
+                i = at(key)
+                if line is None:
+                    del keyed[i]
+                else:
+                    keyed[i] = (key, line)
+            elif line is not None:
+                present = previous in (k for k, _ in keyed)
+                keyed.insert(at(previous) + 1 if present else len(keyed), (key, line))
+            previous = key
+        out += [line for _, line in keyed]
+    return "\n".join(out) + "\n"

@@ -6,26 +6,9 @@ import json
 
 import pytest
 import xarray as xr
+from conftest import case_text
 
-GOOD = """
-model = "halfspace"
-[halfspace]
-profile = "sphere"
-radius = 0.01
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-friction = 0.5
-[loading]
-P0 = 100.0
-P1 = 0.0
-Q0 = 0.0
-Q1 = 30.0
-phase = 0.0
-[run]
-cycles = 3
-steps_per_cycle = 200
-sliders = 500
-"""
+GOOD = case_text("halfspace_sphere", run={"steps_per_cycle": 200, "sliders": 500})
 
 
 def test_run_writes_summary_dataset_figures(run_cli, write_case, tmp_path):

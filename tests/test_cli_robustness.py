@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import case_text
 
 from slipcycle.cli.main import main
 from slipcycle.io.results import remove_stale_partials
@@ -26,23 +27,8 @@ from slipcycle.io.results import remove_stale_partials
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 CLI = [sys.executable, "-m", "slipcycle.cli.main"]
 
-SPHERE = """\
-model = "halfspace"
-[halfspace]
-profile = "sphere"
-radius = 0.01
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-friction = 0.5
-[loading]
-P0 = 100.0
-P1 = 20.0
-Q1 = 30.0
-phase = 1.0
-[run]
-cycles = 3
-steps_per_cycle = 200
-"""
+SPHERE = case_text("halfspace_sphere", loading={"P1": 20.0, "Q0": None, "phase": 1.0},
+                   run={"steps_per_cycle": 200})
 
 
 def _numbers(out: Path) -> tuple[dict, dict]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import case_text
 
 from slipcycle.halfspace import ContactElasticity, make_bed, run_history, sphere
 from slipcycle.halfspace.case import parse_case
@@ -116,20 +117,8 @@ def test_hertz_pressure_from_abel_transform():
 
 
 def test_dissipation_density_integrates_to_total():
-    text = """
-model = "halfspace"
-[halfspace]
-profile = "sphere"
-radius = 0.01
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-friction = 0.5
-[loading]
-P0 = 100.0
-P1 = 30.0
-Q1 = 30.0
-phase = 1.2
-"""
+    text = case_text("halfspace_sphere", loading={"P1": 30.0, "Q0": None, "phase": 1.2},
+                     run=None)
     from slipcycle.halfspace.outputs import package
 
     model = parse_case(parse_case_text(text))

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import case_text
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -94,26 +95,10 @@ def test_python_api_w_hat_equals_map_kernel(P1, Q1, phi):
                                                                        abs=1e-12)
 
 
-HALFSPACE = """
-model = "halfspace"
-[halfspace]
-profile = "sphere"
-radius = 0.01
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-friction = 0.5
-[loading]
-P0 = 100.0
-P1 = {P1}
-P1_phase = {P1_phase}
-Q0 = {Q0}
-Q1 = {Q1}
-phase = {phase}
-[run]
-cycles = 4
-steps_per_cycle = 64
-sliders = 300
-"""
+def _halfspace(**loading) -> str:
+    """The sphere case with P1, P1_phase, Q0, Q1 and phase set."""
+    return case_text("halfspace_sphere", loading=loading,
+                     run={"cycles": 4, "steps_per_cycle": 64, "sliders": 300})
 
 
 @settings(max_examples=10, deadline=None)
@@ -121,7 +106,7 @@ sliders = 300
        st.floats(0.0, 40.0), st.floats(-10.0, 10.0), st.floats(0.0, 20.0))
 def test_case_file_and_python_api_mean_the_same_phases(phase, P1_phase, P1, Q0, Q1):
     """phase and P1_phase are lags: P = P0 + P1 cos(θ − P1_phase), Q = Q0 + Q1 cos(θ − phase)."""
-    text = HALFSPACE.format(P1=P1, P1_phase=P1_phase, Q0=Q0, Q1=Q1, phase=phase)
+    text = _halfspace(P1=P1, P1_phase=P1_phase, Q0=Q0, Q1=Q1, phase=phase)
     from_toml = parse_case(parse_case_text(text))
     normal, tangential = contact_loads(100.0, P1, Q0, Q1, phase, P1_phase)
     th = np.linspace(0, 2 * np.pi, 17)
@@ -145,7 +130,7 @@ def test_case_file_and_python_api_mean_the_same_phases(phase, P1_phase, P1, Q0, 
 
 CLI_CASES = {
     "rough_out_of_phase": ROUGH_RUN.format(Q1=30.0).replace("P1 = 0.0", "P1 = 80.0\nphase = 1.3"),
-    "sphere_lagging": HALFSPACE.format(P1=30.0, P1_phase=0.4, Q0=5.0, Q1=20.0, phase=-1.1),
+    "sphere_lagging": _halfspace(P1=30.0, P1_phase=0.4, Q0=5.0, Q1=20.0, phase=-1.1),
 }
 
 

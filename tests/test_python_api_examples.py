@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import case_text
 
 from slipcycle.io import parse_case_text
 
@@ -39,20 +40,8 @@ def test_halfspace_example(tmp_path):
     from slipcycle.halfspace.case import run_case
 
     got = run_example("halfspace", tmp_path)
-    ref = run_case(parse_case_text("""model = "halfspace"
-[halfspace]
-profile = "sphere"
-radius = 0.01
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-friction = 0.5
-[loading]
-P0 = 100.0
-Q1 = 30.0
-[run]
-cycles = 3
-steps_per_cycle = 400
-""")).summary
+    ref = run_case(parse_case_text(case_text(
+        "halfspace_sphere", loading={"P1": None, "Q0": None, "phase": None}))).summary
     assert close(got["dissipation_per_cycle"], ref["dissipation_per_cycle"])
     assert (got["steady"] == "True") == (ref["steady_state"] == "steady")
 
@@ -61,23 +50,8 @@ def test_discrete_example(tmp_path):
     from slipcycle.discrete.case import run_case
 
     got = run_example("discrete", tmp_path)
-    ref = run_case(parse_case_text("""model = "discrete"
-[discrete]
-A = [[1.0, -0.3], [-0.3, 0.8]]
-B = [[0.4, 0.1], [-0.2, 0.3]]
-C = [[1.0, -0.2], [-0.2, 1.0]]
-friction = 0.5
-[loading]
-p0 = [1.0, 1.0]
-q0 = [0.0, 0.0]
-p1 = [0.3, 0.2]
-p1_phase = [0.0, 1.0]
-q1 = [0.4, 0.5]
-q1_phase = [0.5, 2.0]
-[run]
-cycles = 40
-steps_per_cycle = 400
-""")).summary
+    ref = run_case(parse_case_text(case_text(
+        "discrete_two_node", discrete={"initial_slip": None}, loading={"lam": None}))).summary
     assert close(got["dissipation_per_cycle"], ref["dissipation_per_cycle"])
     assert close(got["f_crit"], ref["f_crit"])
     assert got["steady_state"] == ref["steady_state"]
@@ -88,25 +62,9 @@ def test_rods_example(tmp_path):
     from slipcycle.rods.case import run_case
 
     got = run_example("rods", tmp_path)
-    ref = run_case(parse_case_text("""model = "rods"
-[rods]
-L = [0.5, 0.5]
-radius = [0.01, 0.01]
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-density = [7850.0, 7850.0]
-friction = 0.3
-axial_force = 1.0e4
-interface = "distributed"
-interface_stiffness = 1.0e13
-damping_ratio = 0.01
-modes = 50
-[loading]
-rotation_amplitude = 1.5e-2
-frequency_ratio = 0.3
-[run]
-regularisation = false
-""")).summary
+    text = case_text("rods_spec", loading={"rotation_amplitude": 1.5e-2},
+                     run={"regularisation": False})
+    ref = run_case(parse_case_text(text)).summary
     for key in ("omega1", "T_dyn_max", "T_qs_max", "dissipation_per_cycle"):
         assert close(got[key], ref[key]), key
     assert ref["dissipation_per_cycle"] > 0   # the example slips

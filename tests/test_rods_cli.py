@@ -7,30 +7,15 @@ import shutil
 from pathlib import Path
 
 import pytest
+from conftest import case_text
 
 ROOT = Path(__file__).resolve().parents[1]
 
-BASE = """
-model = "rods"
-[rods]
-L = [0.5, 0.5]
-radius = [0.01, 0.01]
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-density = [7850.0, 7850.0]
-friction = 0.3
-axial_force = 1.0e4
-interface = "{interface}"
-interface_stiffness = 1.0e13
-damping_ratio = 0.01
-modes = {modes}
-[loading]
-rotation_amplitude = {amp}
-frequency_ratio = 0.3
-[run]
-steps_per_cycle = 200
-regularisation_points = 10
-"""
+def _base(interface: str, modes: int, amp: float) -> str:
+    """The specification's rods case with the interface, modes and amplitude set."""
+    return case_text("rods_spec", rods={"interface": interface, "modes": modes},
+                     loading={"rotation_amplitude": amp},
+                     run={"steps_per_cycle": 200, "regularisation_points": 10})
 
 
 def test_spec_example_runs_as_written(run_cli, tmp_path):
@@ -55,7 +40,7 @@ def test_spec_example_runs_as_written(run_cli, tmp_path):
 
 @pytest.mark.parametrize("interface", ["distributed", "coulomb", "jenkins", "iwan", "welded"])
 def test_every_interface_runs_with_slip(run_cli, write_case, tmp_path, interface):
-    case = write_case(BASE.format(interface=interface, modes=10, amp=0.02)
+    case = write_case(_base(interface=interface, modes=10, amp=0.02)
                       .replace("regularisation_points = 10", "regularisation = false"))
     code, out, err = run_cli("run", case, "--out", tmp_path / "o", "--quiet")
     assert code == 0, err
@@ -82,7 +67,7 @@ def test_every_interface_runs_with_slip(run_cli, write_case, tmp_path, interface
     (("rotation_amplitude = 0.02", "rotation_amplitude = nan"), "loading.rotation_amplitude"),
 ])
 def test_bad_input_refused_with_key(run_cli, write_case, tmp_path, edit, key):
-    text = BASE.format(interface="distributed", modes=10, amp=0.02).replace(*edit)
+    text = _base(interface="distributed", modes=10, amp=0.02).replace(*edit)
     code, out, err = run_cli("run", write_case(text), "--out", tmp_path / "o")
     assert code == 2
     assert err.startswith(f"error: {key}:"), err
@@ -90,7 +75,7 @@ def test_bad_input_refused_with_key(run_cli, write_case, tmp_path, edit, key):
 
 
 def test_limits_command_small_grid(run_cli, write_case, tmp_path):
-    text = BASE.format(interface="distributed", modes=10, amp=0.014) + """
+    text = _base(interface="distributed", modes=10, amp=0.014) + """
 [limits]
 frequency_ratio = {start = 0.02, stop = 1.0, num = 8}
 amplitude_ratio = [0.5, 1.0, 2.0]
@@ -109,7 +94,7 @@ position_frequencies = 3
 
 
 def test_limits_refuses_bad_tolerance(run_cli, write_case, tmp_path):
-    text = BASE.format(interface="distributed", modes=10, amp=0.014)
+    text = _base(interface="distributed", modes=10, amp=0.014)
     code, out, err = run_cli("limits", write_case(text), "--tolerance", "2", "--out",
                              tmp_path / "l")
     assert code == 2 and "--tolerance" in err

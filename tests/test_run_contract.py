@@ -12,67 +12,21 @@ import tomllib
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import case_text
 
 import slipcycle
 from slipcycle.io import CaseError, parse_case_text
 from slipcycle.result import STEADY_STATES, RunResult, SteadyState
 
-SPHERE = """model = "halfspace"
-[halfspace]
-profile = "sphere"
-radius = 0.01
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-friction = 0.5
-[loading]
-P0 = 100.0
-Q1 = 30.0
-[run]
-cycles = 3
-steps_per_cycle = 64
-sliders = 200
-"""
+SPHERE = case_text("halfspace_sphere", loading={"P1": None, "Q0": None, "phase": None},
+                   run={"steps_per_cycle": 64, "sliders": 200})
 
-TWO_NODE = """model = "discrete"
-[discrete]
-A = [[1.0, -0.3], [-0.3, 0.8]]
-B = [[0.4, 0.1], [-0.2, 0.3]]
-C = [[1.0, -0.2], [-0.2, 1.0]]
-friction = 0.5
-initial_slip = [0.0, 0.0]
-[loading]
-lam = 1.0
-p0 = [1.0, 1.0]
-q0 = [0.0, 0.0]
-p1 = [0.3, 0.2]
-p1_phase = [0.0, 1.0]
-q1 = [0.4, 0.5]
-q1_phase = [0.5, 2.0]
-[run]
-cycles = 10
-steps_per_cycle = 64
-"""
+TWO_NODE = case_text("discrete_two_node", run={"cycles": 10, "steps_per_cycle": 64})
 
-RODS = """model = "rods"
-[rods]
-L = [0.5, 0.5]
-radius = [0.01, 0.01]
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-density = [7850.0, 7850.0]
-friction = 0.3
-axial_force = 1.0e4
-interface = "jenkins"
-interface_stiffness = 1.0e13
-modes = 10
-[loading]
-rotation_amplitude = 0.014
-frequency_ratio = 0.3
-[run]
-steps_per_cycle = 64
-cycles = 50
-regularisation = false
-"""
+RODS = case_text("rods_spec",
+                 rods={"interface": "jenkins", "damping_ratio": None, "modes": 10},
+                 loading={"rotation_amplitude": 0.014},
+                 run={"steps_per_cycle": 64, "cycles": 50, "regularisation": False})
 
 CASES = {"halfspace": SPHERE, "discrete": TWO_NODE, "rods": RODS}
 

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from conftest import case_text
 
 from slipcycle.io.results import to_jsonable
 from slipcycle.result import StudyResult
@@ -30,31 +31,11 @@ steps_per_cycle = 32
 sliders = 20
 """
 
-RODS_CASE = """
-model = "rods"
-[rods]
-L = [0.5, 0.5]
-radius = [0.01, 0.01]
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-density = [7850.0, 7850.0]
-friction = 0.3
-axial_force = 1.0e4
-interface = "distributed"
-interface_stiffness = 1.0e13
-damping_ratio = 0.01
-modes = 6
-[loading]
-rotation_amplitude = 0.014
-[run]
-steps_per_cycle = 64
-cycles = 40
-[limits]
-frequency_ratio = [0.05, 0.5]
-amplitude_ratio = [0.5, 2.0]
-position = [0.4]
-position_frequencies = 2
-"""
+RODS_CASE = case_text(
+    "rods_spec", rods={"modes": 6}, loading={"rotation_amplitude": 0.014, "frequency_ratio": None},
+    run={"steps_per_cycle": 64, "cycles": 40},
+    limits={"frequency_ratio": [0.05, 0.5], "amplitude_ratio": [0.5, 2.0], "position": [0.4],
+            "position_frequencies": 2})
 
 
 def _capture(monkeypatch, module, name):
