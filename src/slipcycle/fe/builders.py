@@ -24,7 +24,16 @@ import numpy as np
 
 from slipcycle.fe.assembly import BodyDofs, assemble, traction_load
 from slipcycle.fe.contact import contact_on_flat, contact_pairs
-from slipcycle.fe.geometry import Body, block_mesh, cylinder_segment_mesh, interface_grid
+from slipcycle.fe.geometry import (
+    Body,
+    Grid,
+    Solid,
+    block_mesh,
+    check_number,
+    cylinder_segment_mesh,
+    interface_grid,
+    solid,
+)
 from slipcycle.fe.reduction import LoadCase, Problem
 
 __all__ = ["TOP_MODES", "block_on_rigid", "two_blocks", "cylinder_on_block", "from_mesh",
@@ -156,6 +165,10 @@ def block_on_rigid(*, width: float, height: float, E: float, nu: float,
 
     Raises
     ------
+    slipcycle.errors.InputError
+        A size, element count, grading or material out of range, keyed by the argument
+        (``upper.E`` for a body's field; :class:`~slipcycle.fe.geometry.Grid`,
+        :class:`~slipcycle.fe.geometry.Solid`).
     ValueError
         An unknown ``top`` or ``formulation``.
 
@@ -168,6 +181,8 @@ def block_on_rigid(*, width: float, height: float, E: float, nu: float,
     coupling).
     """
     cw = width if contact_width is None else contact_width
+    Grid(width, cw, elements, grading, thickness)
+    Solid(E=E, nu=nu, height=height)
     x = interface_grid(width, cw, elements, grading)
     h0 = cw / elements
     mesh = block_mesh(x, height, h0, grading, "above", cw / 2)
@@ -198,7 +213,7 @@ def two_blocks(*, width: float, upper: dict, lower: dict, contact_width: float |
     ----------
     width : float
         Width of both blocks (m): x ∈ [−width/2, width/2].
-    upper : dict
+    upper : dict or Solid
         Body 1, y ∈ [0, height]: ``{"height": m, "E": Pa, "nu": -}``.
     lower : dict
         Body 2, y ∈ [−height, 0], clamped at y = −height: same keys.
@@ -235,6 +250,10 @@ def two_blocks(*, width: float, upper: dict, lower: dict, contact_width: float |
 
     Raises
     ------
+    slipcycle.errors.InputError
+        A size, element count, grading or material out of range, keyed by the argument
+        (``upper.E`` for a body's field; :class:`~slipcycle.fe.geometry.Grid`,
+        :class:`~slipcycle.fe.geometry.Solid`).
     ValueError
         An unknown ``top`` or ``formulation``.
 
@@ -246,6 +265,8 @@ def two_blocks(*, width: float, upper: dict, lower: dict, contact_width: float |
     J. Appl. Mech. 36, 650–652 (β of the pair: B = 0 for identical blocks).
     """
     cw = width if contact_width is None else contact_width
+    Grid(width, cw, elements, grading, thickness)
+    upper, lower = solid("upper", upper).as_dict(), solid("lower", lower).as_dict()
     x = interface_grid(width, cw, elements, grading)
     h0 = cw / elements
     b1 = Body("upper", block_mesh(x, upper["height"], h0, grading, "above", cw / 2),
@@ -281,7 +302,7 @@ def cylinder_on_block(*, radius: float, cylinder: dict, block: dict, width: floa
     ----------
     radius : float
         R (m), > width/2.
-    cylinder : dict
+    cylinder : dict or Solid
         Body 1: ``{"height": m, "E": Pa, "nu": -}``; ``height`` is the y of its flat top
         (the arc touches y = 0 at x = 0).
     block : dict
@@ -334,9 +355,12 @@ def cylinder_on_block(*, radius: float, cylinder: dict, block: dict, width: floa
     (1985). Contact Mechanics, §4.2 and §7.6 (the 2-D Hertz and Cattaneo–Mindlin
     solutions the model is checked against).
     """
+    check_number("radius", radius, gt=0)
     if width >= 2 * radius:
         raise ValueError("cylinder_on_block: width must be smaller than 2 * radius")
     cw = contact_width
+    Grid(width, cw, elements, grading, thickness)
+    cylinder, block = solid("cylinder", cylinder).as_dict(), solid("block", block).as_dict()
     x = interface_grid(width, cw, elements, grading)
     h0 = cw / elements
     mesh1, _ = cylinder_segment_mesh(x, radius, cylinder["height"], h0, grading, cw / 2)

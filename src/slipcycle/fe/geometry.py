@@ -18,18 +18,157 @@ Units: metres.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from skfem import MeshTri
 
-__all__ = ["Body", "graded_spacing", "interface_grid", "depth_grid", "block_mesh",
+from slipcycle.errors import InputError
+
+__all__ = ["Body", "Material", "Solid", "Grid", "check_number", "solid",
+           "graded_spacing", "interface_grid", "depth_grid", "block_mesh",
            "cylinder_segment_mesh"]
 
 
-@dataclass
+def check_number(name: str, value: Any, *, gt: float | None = None, ge: float | None = None,
+                 lt: float | None = None, le: float | None = None,
+                 integer: bool = False) -> float | int:
+    """Refuse a value that is not a finite (integer) number within the bounds.
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        Keyed by ``name``, with the messages of the case-file reader (``must be > 0, got
+        -1``), so that a model file and the Python object say the same.
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer
+                                                 | np.floating):
+        kind = "an integer" if integer else "a number"
+        raise InputError(name, f"must be {kind}, got {value!r}")
+    if integer and not float(value).is_integer():
+        raise InputError(name, f"must be an integer, got {value!r}")
+    if not math.isfinite(float(value)):
+        raise InputError(name, f"must be finite, got {float(value)}")
+    for bound, ok, sym in ((gt, value > (gt or 0), ">"), (ge, value >= (ge or 0), ">="),
+                           (lt, value < (lt or 0), "<"), (le, value <= (le or 0), "<=")):
+        if bound is not None and not ok:
+            raise InputError(name, f"must be {sym} {bound:g}, got {value:g}")
+    return int(value) if integer else float(value)
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic linear-elastic material in plane strain.
+
+    Attributes
+    ----------
+    E : float
+        Young's modulus (Pa), > 0.
+    nu : float
+        Poisson's ratio, −1 < ν < 0.5 (thermodynamic bounds; the case file asks 0 ≤ ν).
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        Keyed by the field (``E`` or ``nu``).
+    """
+
+    E: float
+    nu: float
+
+    def __post_init__(self):
+        check_number("E", self.E, gt=0)
+        check_number("nu", self.nu, gt=-1, lt=0.5)
+
+
+@dataclass(frozen=True)
+class Solid(Material):
+    """A generated body: its height (m, > 0) and material (:class:`Material`).
+
+    Attributes
+    ----------
+    height : float
+        Height of the block or cylinder segment (m), > 0.
+    """
+
+    height: float = float("nan")
+
+    def __post_init__(self):
+        check_number("height", self.height, gt=0)
+        super().__post_init__()
+
+    def as_dict(self) -> dict:
+        """``{"height": m, "E": Pa, "nu": 1}`` (the builders' metadata form)."""
+        return {"height": self.height, "E": self.E, "nu": self.nu}
+
+
+def solid(name: str, value: Solid | dict) -> Solid:
+    """A :class:`Solid` from a Solid or a dict (``height``, ``E``, ``nu``), errors keyed
+    ``name.field``.
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+    """
+    if isinstance(value, Solid):
+        return value
+    if not isinstance(value, dict):
+        raise InputError(name, "must be a Solid or a dict with height, E and nu")
+    unknown = sorted(set(value) - {"height", "E", "nu"})
+    if unknown:
+        raise InputError(f"{name}.{unknown[0]}", "unknown key")
+    for k in ("height", "E", "nu"):
+        if k not in value:
+            raise InputError(f"{name}.{k}", "required key is missing")
+    try:
+        return Solid(E=value["E"], nu=value["nu"], height=value["height"])
+    except InputError as exc:
+        raise InputError(f"{name}.{exc.key}", exc.problem) from None
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The interface grid of a generated geometry.
+
+    Attributes
+    ----------
+    width : float
+        Width of the bodies (m), > 0.
+    contact_width : float
+        Width of the zone of contact candidates (m), 0 < contact_width ≤ width.
+    elements : int
+        Elements across the contact zone, ≥ 1.
+    grading : float
+        Geometric growth ratio of the element size away from the contact zone and with
+        depth, ≥ 1 (1: uniform).
+    thickness : float
+        Out-of-plane thickness of the plane-strain slab (m), > 0.
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        Keyed by the field.
+    """
+
+    width: float
+    contact_width: float
+    elements: int = 20
+    grading: float = 1.3
+    thickness: float = 1.0
+
+    def __post_init__(self):
+        check_number("width", self.width, gt=0)
+        check_number("contact_width", self.contact_width, gt=0, le=self.width)
+        check_number("elements", self.elements, ge=1, integer=True)
+        check_number("grading", self.grading, ge=1.0)
+        check_number("thickness", self.thickness, gt=0)
+
+
+@dataclass(frozen=True)
 class Body:
-    """One linear-elastic body.
+    """One linear-elastic body (frozen; ``info`` is filled by the assembly).
 
     Attributes
     ----------
@@ -41,7 +180,14 @@ class Body:
     E : float
         Young's modulus, Pa.
     nu : float
-        Poisson's ratio (plane strain, 0 <= nu < 0.5).
+        Poisson's ratio (plane strain, −1 < ν < 0.5).
+    info : dict
+        Metadata (source file, the formulation chosen by the assembly).
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        ``E`` or ``nu`` out of range (keyed by the field).
     """
 
     name: str
@@ -49,6 +195,9 @@ class Body:
     E: float
     nu: float
     info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        Material(self.E, self.nu)
 
     def facets(self, tag: str) -> np.ndarray:
         """Facet indices of the boundary named ``tag`` (empty if absent)."""

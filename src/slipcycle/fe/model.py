@@ -1,7 +1,11 @@
 """Model files for ``slipcycle reduce`` (``model = "fe"``); see ``docs/fe.md``.
 
 Every key is validated before any meshing; problems are :class:`CaseError` naming the
-dotted key. :func:`build_problem` returns the assembled
+dotted key. The reader only translates keys: the checks of values live in the frozen model
+objects (:class:`~slipcycle.fe.geometry.Material`, :class:`~slipcycle.fe.geometry.Solid`,
+:class:`~slipcycle.fe.geometry.Grid`), whose :class:`~slipcycle.errors.InputError` is
+re-keyed to the TOML key (the file format also asks 0 ≤ ν and caps ``elements`` and
+``grading``). :func:`build_problem` returns the assembled
 :class:`~slipcycle.fe.reduction.Problem`; :func:`discrete_case_text` turns the optional
 ``[fe.discrete]`` table into a ready-to-run discrete case file.
 """
@@ -10,7 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from slipcycle.errors import InputError
 from slipcycle.fe import builders
+from slipcycle.fe.geometry import Grid, Material, Solid
 from slipcycle.fe.loads import combined_loads
 from slipcycle.fe.reduction import Problem, ReducedModel
 from slipcycle.io.case import Case, CaseError, Section
@@ -20,14 +26,27 @@ __all__ = ["GEOMETRIES", "build_problem", "discrete_case_text", "read_discrete_t
 GEOMETRIES = ("block_on_rigid", "two_blocks", "cylinder_on_block", "mesh")
 
 
+def _make(sec: Section, cls, **kw):
+    """``cls(**kw)``, its InputError re-keyed to the key of ``sec``."""
+    try:
+        return cls(**kw)
+    except InputError as exc:
+        raise sec.error(exc.key, exc.problem) from None
+
+
 def _material(sec: Section) -> dict:
-    return {"E": sec.float("E", gt=0), "nu": sec.float("nu", ge=0, lt=0.5)}
+    E = sec.float("E")
+    _make(sec, Material, E=E, nu=0.0)
+    nu = sec.float("nu", ge=0)  # the file format asks 0 <= nu
+    m = _make(sec, Material, E=E, nu=nu)
+    return {"E": m.E, "nu": m.nu}
 
 
 def _body(sec: Section) -> dict:
-    out = {"height": sec.float("height", gt=0)}
-    out.update(_material(sec))
-    return out
+    height = sec.float("height")
+    _make(sec, Solid, E=1.0, nu=0.0, height=height)
+    mat = _material(sec)
+    return _make(sec, Solid, height=height, **mat).as_dict()
 
 
 def build_problem(case: Case) -> Problem:
@@ -36,24 +55,28 @@ def build_problem(case: Case) -> Problem:
     geometry = fe.string("geometry", choices=GEOMETRIES)
     common = {
         "element": fe.string("element", "P2", choices=("P1", "P2")),
-        "thickness": fe.float("thickness", 1.0, gt=0),
+        "thickness": fe.float("thickness", 1.0),
         "formulation": fe.string("formulation", "auto",
                                  choices=("auto", "displacement", "mixed")),
     }
+    _make(fe, Grid, width=1.0, contact_width=1.0, thickness=common["thickness"])
     read_discrete_table(fe)  # validate now, used after the reduction
     if geometry == "mesh":
         return _mesh_problem(fe, common, case)
     common["top"] = fe.string("top", "displacement", choices=("displacement",))
-    width = fe.float("width", gt=0)
-    grid = {
-        "elements": fe.int("elements", 20, ge=1, le=20000),
-        "grading": fe.float("grading", 1.3, ge=1.0, le=3.0),
-    }
+    width = fe.float("width")
+    _make(fe, Grid, width=width, contact_width=width)
+    elements = fe.int("elements", 20, le=20000)
+    grading = fe.float("grading", 1.3, le=3.0)
+    g = _make(fe, Grid, width=width, contact_width=width, elements=elements, grading=grading,
+              thickness=common["thickness"])
+    grid = {"elements": g.elements, "grading": g.grading}
     if geometry == "cylinder_on_block":
         radius = fe.float("radius", gt=0)
         if width >= 2 * radius:
             raise fe.error("width", f"must be < 2 * radius = {2 * radius:g}, got {width:g}")
-        cw = fe.float("contact_width", gt=0, le=width)
+        cw = fe.float("contact_width")
+        _make(fe, Grid, width=width, contact_width=cw)
         cyl, blk = fe.table("cylinder"), fe.table("block")
         cyl_d, blk_d = _body(cyl), _body(blk)
         ymin = radius - np.sqrt(radius**2 - (width / 2) ** 2)
@@ -65,9 +88,10 @@ def build_problem(case: Case) -> Problem:
         case.finish()
         return builders.cylinder_on_block(radius=radius, cylinder=cyl_d, block=blk_d,
                                           width=width, contact_width=cw, **grid, **common)
-    cw = fe.float("contact_width", width, gt=0, le=width)
+    cw = fe.float("contact_width", width)
+    _make(fe, Grid, width=width, contact_width=cw)
     if geometry == "block_on_rigid":
-        body = {"height": fe.float("height", gt=0), **_material(fe)}
+        body = _body(fe)
         case.finish()
         return builders.block_on_rigid(width=width, contact_width=cw, **body, **grid, **common)
     up, lo = fe.table("upper"), fe.table("lower")

@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from slipcycle.fe.assembly import BodyDofs
 from slipcycle.fe.condense import schur_complement
 from slipcycle.fe.contact import ContactSet
+from slipcycle.result import _Contract, _fmt, _html_table
 
 __all__ = ["LoadCase", "Problem", "ReducedModel", "reduce_problem", "transformation"]
 
@@ -101,9 +102,32 @@ class Problem:
         return self.K.shape[0]
 
 
-@dataclass
-class ReducedModel:
+#: unit of every numeric entry of :meth:`ReducedModel.summary`
+REDUCED_UNITS = {"n_contact_nodes": "1", "n_dofs": "1", "coupling_B_over_A": "1",
+                 "dundurs_beta": "1", "thickness": "m"}
+
+
+def _beta(info: dict) -> float | None:
+    """Dundurs β of the model's bodies from its metadata (None if not known)."""
+    from slipcycle.fe.checks import dundurs_beta
+
+    g = info.get("geometry")
+    if g in ("block_on_rigid", "mesh") and "E" in info:
+        return float(dundurs_beta(info["E"], info["nu"]))
+    pair = {"two_blocks": ("upper", "lower"), "cylinder_on_block": ("cylinder", "block")}
+    if g in pair:
+        b1, b2 = (info[k] for k in pair[g])
+        return float(dundurs_beta(b1["E"], b1["nu"], b2["E"], b2["nu"]))
+    return None
+
+
+@dataclass(repr=False)
+class ReducedModel(_Contract):
     """Reduced stiffness of the contact nodes and the load vectors.
+
+    Offers the analysis contract: :meth:`summary` (with ``units``), :meth:`to_dataset`,
+    :meth:`figures`, a one-line ``repr`` and an HTML table; :meth:`save` writes the
+    ``.npz`` of ``slipcycle reduce``.
 
     Attributes
     ----------
@@ -159,6 +183,89 @@ class ReducedModel:
             q += a * self.q_w[i]
             p += a * self.p_w[i]
         return q, p
+
+    # -- the analysis contract ---------------------------------------------------------------
+    def summary(self) -> dict:
+        """Size and coupling of the reduced model, with ``units``.
+
+        Returns
+        -------
+        dict
+            ``model`` (``"fe"``), ``analysis`` (``"reduction"``), ``geometry``,
+            ``n_contact_nodes`` N, ``n_dofs``, ``element``, ``load_cases`` and
+            ``load_units``, ``coupling_B_over_A`` ‖B‖_F/‖A‖_F [1] (Barber 2012),
+            ``dundurs_beta`` β [1] of the bodies (Dundurs 1969; None when unknown),
+            ``units``. No critical friction coefficient is computed by the reduction.
+        """
+        out = {"model": "fe", "analysis": "reduction",
+               "geometry": self.info.get("geometry"),
+               "n_contact_nodes": int(self.n),
+               "n_dofs": self.info.get("n_dofs"),
+               "element": self.info.get("element"),
+               "load_cases": list(self.load_cases), "load_units": list(self.load_units),
+               "coupling_B_over_A": float(np.linalg.norm(self.B) / np.linalg.norm(self.A)),
+               "dundurs_beta": _beta(self.info)}
+        out["units"] = {k: u for k, u in REDUCED_UNITS.items() if k in out}
+        return out
+
+    def to_dataset(self):
+        """A, B, C (``node`` × ``node_j``) [N/m], q^w, p^w (``load_case`` × ``node``) [N
+        per unit of the case], node coordinates x, y and gaps [m]: the arrays of the
+        ``.npz`` with units."""
+        import xarray as xr
+
+        dims2, dimsw = ("node", "node_j"), ("load_case", "node")
+        ds = xr.Dataset(
+            {"A": (dims2, self.A, {"units": "N/m", "long_name": "tangential stiffness"}),
+             "B": (dims2, self.B, {"units": "N/m",
+                                   "long_name": "normal force per unit slip"}),
+             "C": (dims2, self.C, {"units": "N/m", "long_name": "normal stiffness"}),
+             "q_w": (dimsw, self.q_w, {"units": "N per unit of the load case",
+                                       "long_name": "tangential reaction, nodes held"}),
+             "p_w": (dimsw, self.p_w, {"units": "N per unit of the load case",
+                                       "long_name": "normal reaction, nodes held"}),
+             "gap": ("node", self.gap, {"units": "m", "long_name": "initial gap"})},
+            coords={"node": ("node", np.arange(self.n)),
+                    "node_j": ("node_j", np.arange(self.n)),
+                    "load_case": ("load_case", np.array(self.load_cases, dtype=str)),
+                    "load_unit": ("load_case", np.array(self.load_units, dtype=str)),
+                    "x": ("node", self.coords[:, 0], {"units": "m"}),
+                    "y": ("node", self.coords[:, 1], {"units": "m"})})
+        ds.attrs.update(normal=np.asarray(self.normal, float),
+                        tangent=np.asarray(self.tangent, float),
+                        dof_order="tangential_first")
+        return ds
+
+    def figures(self, dataset=None) -> dict:
+        """``coupling``: |A|, |B|, |C| as images over the contact nodes."""
+        def draw():
+            from matplotlib.figure import Figure
+
+            fig = Figure(figsize=(10, 3.4))
+            for ax, (name, M) in zip(fig.subplots(1, 3), (("A", self.A), ("B", self.B),
+                                                         ("C", self.C)), strict=True):
+                im = ax.imshow(np.abs(M), cmap="viridis")
+                ax.set_title(f"|{name}| [N/m]")
+                ax.set_xlabel("node")
+                fig.colorbar(im, ax=ax, shrink=0.8)
+            fig.tight_layout()
+            return fig
+
+        return {"coupling": draw}
+
+    def __repr__(self) -> str:
+        s = self.summary()
+        return (f"<ReducedModel fe reduction: geometry={s['geometry']}, "
+                f"n_contact_nodes={s['n_contact_nodes']}, load_cases={s['load_cases']}, "
+                f"coupling_B_over_A={_fmt(s['coupling_B_over_A'])}, "
+                f"dundurs_beta={_fmt(s['dundurs_beta'])}>")
+
+    def _repr_html_(self) -> str:
+        s = self.summary()
+        return _html_table("ReducedModel (fe reduction)",
+                           [(k, s[k], s["units"].get(k, "")) for k in
+                            ("geometry", "n_contact_nodes", "n_dofs", "load_cases",
+                             "coupling_B_over_A", "dundurs_beta")])
 
     def arrays(self) -> dict:
         return {

@@ -297,7 +297,7 @@ def analyse(rc: RodsCase) -> dict:
         ``natural`` : (5,) ndarray
             Lowest five torsional natural frequencies of the welded system with both outer
             ends fixed (rad/s).
-        ``reg`` : dict or None
+        ``reg`` : RegularisationResult or None
             :func:`slipcycle.rods.regularisation.regularisation_study` (None when
             ``rc.regularisation`` is false).
 
@@ -477,11 +477,8 @@ class RodsResult(RunResult):
                                "elements": res["bed"].size}
         reg = res["reg"]
         if reg is not None:
-            summary["regularisation"] = {
-                m: {"slope_microslip": reg[m]["slope_microslip"],
-                    "slope_macroslip": reg[m]["slope_macroslip"]}
-                for m in ("distributed", "jenkins", "coulomb", "iwan")}
-            summary["regularisation"]["iwan_fit"] = reg["iwan_params"]
+            summary["regularisation"] = reg.slopes()
+            summary["regularisation"]["iwan_fit"] = reg.iwan_params
         summary["units"] = {k: v for k, v in RUN_UNITS.items()
                             if k.split(".")[0] in summary}
         return summary
@@ -504,10 +501,10 @@ class RodsResult(RunResult):
              "delta_qs": ("time", qs.delta, {"units": "rad"})},
             coords={"time": ("time", dyn.t, tatt)})
         if reg is not None:
-            ds = ds.assign_coords(amplitude=("amplitude", reg["amplitude"], {"units": "rad"}))
-            for m in ("distributed", "jenkins", "coulomb", "iwan"):
-                ds[f"reg_T_{m}"] = ("amplitude", reg[m]["T_amp"], {"units": "N m"})
-                ds[f"reg_D_{m}"] = ("amplitude", reg[m]["dissipation"], {"units": "J"})
+            sweep = reg.to_dataset()  # the study's own Dataset: amplitude, reg_T_*, reg_D_*
+            ds = ds.assign_coords(amplitude=sweep["amplitude"])
+            for name in sweep.data_vars:
+                ds[name] = sweep[name]
         return ds
 
     def figures(self, dataset=None) -> dict:
@@ -519,7 +516,7 @@ class RodsResult(RunResult):
         figures = {"hysteresis": lambda: plots.hysteresis(ds),
                    "time_history": lambda: plots.time_history(ds)}
         if reg is not None:
-            figures["regularisation"] = lambda: plots.regularisation(reg)
+            figures.update(reg.figures())
         return figures
 
 
