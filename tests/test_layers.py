@@ -77,6 +77,28 @@ def test_no_package_cycles():
             visit(node, [node])
 
 
+def test_no_module_cycles_hidden_in_functions():
+    """No two modules import each other, directly or around a loop, counting the imports
+    inside functions (a function-local import must not be what keeps a cycle apart)."""
+    import grimp
+
+    graph = grimp.build_graph("slipcycle")
+    state: dict[str, int] = {}
+
+    def visit(node, stack):
+        state[node] = 1
+        for nxt in sorted(graph.find_modules_directly_imported_by(node)):
+            if state.get(nxt) == 1:
+                pytest.fail("module cycle: " + " -> ".join(stack[stack.index(nxt):] + [nxt]))
+            if state.get(nxt) is None:
+                visit(nxt, stack + [nxt])
+        state[node] = 2
+
+    for node in sorted(graph.modules):
+        if state.get(node) is None:
+            visit(node, [node])
+
+
 def test_command_modules_only_parse_call_and_print():
     """Every analysis lives in the library: the command modules stay short."""
     for path in sorted((SRC / "cli").glob("cmd_*.py")):

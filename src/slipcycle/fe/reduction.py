@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from slipcycle.fe.assembly import BodyDofs
 from slipcycle.fe.condense import schur_complement
 from slipcycle.fe.contact import ContactSet
+from slipcycle.materials import dundurs_beta
 from slipcycle.result import _Contract, _fmt, _html_table
 
 __all__ = ["LoadCase", "Problem", "ReducedModel", "reduce_problem", "transformation"]
@@ -109,8 +110,6 @@ REDUCED_UNITS = {"n_contact_nodes": "1", "n_dofs": "1", "coupling_B_over_A": "1"
 
 def _beta(info: dict) -> float | None:
     """Dundurs β of the model's bodies from its metadata (None if not known)."""
-    from slipcycle.fe.checks import dundurs_beta
-
     g = info.get("geometry")
     if g in ("block_on_rigid", "mesh") and "E" in info:
         return float(dundurs_beta(info["E"], info["nu"]))

@@ -4,17 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from slipcycle.materials import dundurs_beta
+
 __all__ = ["ContactElasticity", "dundurs_beta"]
-
-
-def dundurs_beta(E1: float, nu1: float, E2: float, nu2: float) -> float:
-    """Dundurs' second parameter β (plane strain); β = 0 for similar materials.
-
-    β = [(1 − 2ν1)/G1 − (1 − 2ν2)/G2] / [2((1 − ν1)/G1 + (1 − ν2)/G2)]  (Dundurs 1969).
-    Normal–tangential coupling of two half-spaces is proportional to β.
-    """
-    G1, G2 = E1 / (2 * (1 + nu1)), E2 / (2 * (1 + nu2))
-    return ((1 - 2 * nu1) / G1 - (1 - 2 * nu2) / G2) / (2 * ((1 - nu1) / G1 + (1 - nu2) / G2))
 
 
 @dataclass(frozen=True)

@@ -201,8 +201,7 @@ def parse_case(case: Case, *, finish: bool = True, limits: bool = False) -> Rods
 
 def _refuse_pole(rods: TwoRods, W: float, w1: float, load: Section, key: str) -> None:
     """A welded, undamped system driven at a natural frequency has no steady state."""
-    from slipcycle.rods.limits import POLE_RTOL
-    from slipcycle.rods.welded import natural_frequencies
+    from slipcycle.rods.welded import POLE_RTOL, natural_frequencies
 
     n = int(W / w1 * 1.05) + 2
     poles = natural_frequencies(rods.with_(interface="welded"), n)

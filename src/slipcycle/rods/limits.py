@@ -34,19 +34,18 @@ import numpy as np
 from slipcycle.io.results import RunOutputs
 from slipcycle.io.sizes import check_memory
 from slipcycle.result import StudyResult
+from slipcycle.rods.case import interface_bed, parse_case
 from slipcycle.rods.interfaces import Bed, Welded, gross_slip_torque, interface_law
 from slipcycle.rods.modal import ModalBasis, Propagator, modal_basis, steady_state
 from slipcycle.rods.model import Excitation, TwoRods
 from slipcycle.rods.quasistatic import quasi_static_loop
-from slipcycle.rods.welded import natural_frequencies, omega1
+from slipcycle.rods.welded import POLE_RTOL, natural_frequencies, omega1
 
 __all__ = ["Study", "Point", "limit_frequency", "regime_map", "position_map",
            "gross_slip_amplitude", "LimitsCase", "parse_limits", "run_limits", "limits_study",
            "LimitsResult", "make_study",
            "POLE_RTOL", "LIMITS_UNITS", "LIMITS_FLAGS"]
 
-#: a frequency within this relative distance of an undamped natural frequency is a pole
-POLE_RTOL = 1e-6
 
 #: bytes per map point kept until the figures are written (arrays, Dataset, figure mesh)
 _MAP_POINT_BYTES = 400.0
@@ -434,7 +433,6 @@ def parse_limits(case, tolerance: float, maps: bool = True) -> LimitsCase:
     ``position`` (L1/(L1 + L2), linear; 0.1…0.9 × 9), ``position_frequencies`` (20).
     """
     from slipcycle.io import CaseError
-    from slipcycle.rods.case import parse_case
 
     if not (0.0 < tolerance < 1.0):
         raise CaseError("--tolerance", f"must be in (0, 1), got {tolerance:g}")
@@ -499,7 +497,6 @@ def make_study(rc) -> tuple[Study, object]:
         The Iwan parameters used (F_S [N m], K_T [N m/rad], χ, β); None for other
         interfaces.
     """
-    from slipcycle.rods.case import interface_bed
 
     bed, iw = interface_bed(rc)
     basis = modal_basis(rc.rods, rc.modes, rc.static_correction)

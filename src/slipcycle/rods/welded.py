@@ -27,7 +27,10 @@ from scipy.optimize import brentq
 from slipcycle.rods.model import TwoRods
 
 __all__ = ["transfer_matrix", "interface_torque_frf", "natural_frequencies", "omega1",
-           "normal_force_frf", "normal_force_history"]
+           "normal_force_frf", "normal_force_history", "POLE_RTOL"]
+
+#: a frequency within this relative distance of an undamped natural frequency is a pole
+POLE_RTOL = 1e-6
 
 
 def transfer_matrix(stiffness: float, c: float, length: float, Omega: float,
