@@ -17,10 +17,9 @@ conditions (Barber 2012, Fig. 3):
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from slipcycle.cli.common import add_common, study_options
+from slipcycle.cli.common import add_common, finish_study, study_options
 from slipcycle.discrete.sizes import count_option
 
 
@@ -46,20 +45,11 @@ def add_parser(sub) -> None:
 
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.discrete.basins import basins_study
-    from slipcycle.io import read_case, write_outputs
+    from slipcycle.io import read_case
 
     case = read_case(args.case, models=["discrete"])
     status = basins_study(case, args.out, grid=args.grid, random=args.random,
                           protocols=args.protocols, v1_range=args.v1, v2_range=args.v2,
                           lam=args.lam, seed=args.seed, **study_options(args))
-    if not status.complete:
-        print(f"stopped with {status.cells_done} of {status.cells_total} cells done; "
-              "complete it with --resume", flush=True)
-        return 0
-    outputs = status.outputs  # status.result.to_outputs(), built once
-    write_outputs(args.out, outputs, case.text, case.path)
-    summary = outputs.summary
-    print(json.dumps({k: summary[k] for k in ("starts", "class_counts", "both_outcomes",
-                                              "lambda1", "lambda2")}, indent=2))
-    print(f"results written to {args.out}/")
-    return 0
+    return finish_study(status, args, case, ("starts", "class_counts", "both_outcomes",
+                                             "lambda1", "lambda2"))

@@ -21,10 +21,9 @@ final lo and hi), ``refinement`` (trial λ values, number of runs), and the case
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from slipcycle.cli.common import add_common, study_options
+from slipcycle.cli.common import add_common, finish_study, study_options
 from slipcycle.discrete.sizes import count_option
 
 
@@ -49,21 +48,11 @@ def add_parser(sub) -> None:
 
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.discrete.shakedown_study import shakedown_study
-    from slipcycle.io import read_case, write_outputs
+    from slipcycle.io import read_case
 
     case = read_case(args.case, models=["discrete"])
     status = shakedown_study(case, args.out, lam_max=args.lam_max, lam_points=args.lam_points,
                              starts=args.starts, seed=args.seed, tol=args.tol,
                              lam_tol=args.lam_tol, **study_options(args))
-    if not status.complete:
-        print(f"stopped with {status.cells_done} of {status.cells_total} runs done; complete "
-              "it with --resume", flush=True)
-        return 0
-    outputs = status.outputs  # status.result.to_outputs(), built once
-    write_outputs(args.out, outputs, case.text, case.path)
-    summary = outputs.summary
-    print(json.dumps({k: summary[k] for k in ("lambda1", "lambda2", "lambda3_bracket",
-                                              "lambda4_bracket", "regime")}, indent=2,
-                     default=str))
-    print(f"results written to {args.out}/")
-    return 0
+    return finish_study(status, args, case, ("lambda1", "lambda2", "lambda3_bracket",
+                                             "lambda4_bracket", "regime"), unit="runs")

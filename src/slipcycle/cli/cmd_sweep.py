@@ -19,10 +19,9 @@ One sweep at a time may use a store: a second one on the same ``--out`` stops at
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from slipcycle.cli.common import add_common, study_options
+from slipcycle.cli.common import add_common, finish_study, study_options
 
 
 def add_parser(sub) -> None:
@@ -46,12 +45,5 @@ def execute(args: argparse.Namespace) -> int:
     status = run_case_sweep(
         case, args.sets, args.out, **study_options(args),
         write=lambda out: write_outputs(args.out, out, case.text, case.path))
-    if not status.complete:
-        print(f"sweep stopped with {status.cells_done} of {status.cells_total} runs done; "
-              f"complete it with --resume", flush=True)
-        return 0
-    summary = status.outputs.summary
-    print(json.dumps({k: summary[k] for k in ("runs", "axes", "dissipation_per_cycle")},
-                     indent=2, default=str))
-    print(f"results written to {args.out}/")
-    return 0
+    return finish_study(status, args, case, ("runs", "axes", "dissipation_per_cycle"),
+                        what="sweep stopped", unit="runs", write=False)

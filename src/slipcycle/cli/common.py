@@ -33,6 +33,27 @@ def add_common(p) -> None:
     p.add_argument("--stop-after", type=int, default=None, help=argparse.SUPPRESS)
 
 
+def finish_study(status, args: argparse.Namespace, case, keys: tuple[str, ...], *,
+                 what: str = "stopped", unit: str = "cells", write: bool = True) -> int:
+    """End a resumable command: report progress if it stopped early; otherwise write its
+    outputs (unless the study wrote them itself), print the ``keys`` of its summary as JSON
+    and where the results went. Returns the exit code (0)."""
+    import json
+
+    from slipcycle.io import write_outputs
+
+    if not status.complete:
+        print(f"{what} with {status.cells_done} of {status.cells_total} {unit} done; "
+              "complete it with --resume", flush=True)
+        return 0
+    if write:
+        write_outputs(args.out, status.outputs, case.text, case.path)
+    summary = status.outputs.summary
+    print(json.dumps({k: summary[k] for k in keys}, indent=2, default=str))
+    print(f"results written to {args.out}/")
+    return 0
+
+
 def study_options(args: argparse.Namespace) -> dict:
     """The keyword arguments of the library's resumable studies from the common options."""
     return {"workers": args.workers, "scheduler": args.scheduler, "resume": args.resume,

@@ -970,7 +970,7 @@ class TaskRunner:
 
 
 def parse_values(spec: str, key: str) -> list:
-    """Values of ``--set key=SPEC``: ``start:stop:num`` (inclusive linspace) or ``a,b,c``.
+    """Values of ``--set key=VALUES``: ``start:stop:num`` (inclusive linspace) or ``a,b,c``.
 
     Integers stay integers when every value is integral and written without a point.
     """
