@@ -7,34 +7,16 @@ import math
 
 import numpy as np
 import pytest
+from conftest import case_text
 
 from slipcycle.io.case import parse_case_text
 from slipcycle.result import StudyResult
 from slipcycle.rods.case import solve_case
 from slipcycle.rods.regularisation import REG_MODELS, RegularisationResult
 
-CASE = """
-model = "rods"
-[rods]
-L = [0.5, 0.5]
-radius = [0.01, 0.01]
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-density = [7850.0, 7850.0]
-friction = 0.3
-axial_force = 1.0e4
-interface = "distributed"
-interface_stiffness = 1.0e13
-damping_ratio = 0.01
-modes = 6
-rings = 10
-[loading]
-rotation_amplitude = 0.001
-frequency_ratio = 0.3
-[run]
-steps_per_cycle = 64
-regularisation_points = 8
-"""
+CASE = case_text("rods_spec", rods={"modes": 6, "rings": 10},
+                 loading={"rotation_amplitude": 0.001},
+                 run={"steps_per_cycle": 64, "regularisation_points": 8})
 
 
 @pytest.fixture(scope="module")
