@@ -24,6 +24,7 @@ from numba import njit
 # the Jenkins bed's exact force-controlled step is shared with the rod solvers
 from slipcycle.kernels.jenkins import (
     _newton,
+    apply_increment,
     solve_tangential_force,
 )
 
@@ -141,33 +142,7 @@ def drive_from(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
                 dv = 0.0  # nothing in contact and no load: nothing moves
         else:
             dv = T_path[k] - V
-        first = n
-        q = 0.0
-        n_slip = 0
-        for i in range(n):
-            told = t[i]
-            dv_i = dv * ke[i] / kt[i]
-            x = told + kt[i] * dv_i
-            c = cap[i]
-            if x > c or x < -c:
-                tn = c if x > c else -c
-                dz = dv_i - (tn - told) / kt[i]
-                if c > 0.0 and abs(x) - c > SLIP_TOL * c:
-                    n_slip += 1
-                    if i < first:
-                        first = i
-            else:
-                tn = x
-                dz = 0.0
-            # Book dissipation against the common ΔV so that Σ_i d_i equals the
-            # trapezoidal ∮Q dV exactly; for a slider touching mid-step this books the
-            # O(ΔV²) pre-touch travel at half its new force (vanishes with refinement).
-            d[i] += 0.5 * (told + tn) * (dv - (tn - told) / kt[i])
-            z[i] += dz
-            if c > 0.0:   # a slider leaving contact releases its force; that is not slip
-                slip[i] += abs(dz)
-            t[i] = tn
-            q += tn
+        q, n_slip, first = apply_increment(t, kt, ke, cap, dv, d, z, slip, SLIP_TOL)
         passes += 1
         if not force_control and n_slip > 0 and abs(q) >= qmax * (1.0 - 1e-12):
             return k, passes  # every slider in contact slides: gross slip

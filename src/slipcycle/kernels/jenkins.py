@@ -11,9 +11,17 @@ stick set of the current piece is the final one), safeguarded by a bracket with 
 steps, and, should that ever stall, a bisection over the sorted breakpoints followed by the
 exact linear solve on the final piece.
 
-Used by the half-space slider bed (:mod:`slipcycle.halfspace.kernels`, after Jäger's
-slider representation of Mindlin contacts) and by the rod interface beds
-(:mod:`slipcycle.rods.kernels`); it belongs to neither, so neither model imports the other.
+Once ΔV is known, :func:`apply_increment` moves every element by it: the return map of a
+Jenkins element with a (moving) limit c_i,
+
+    t_i ← clip(t_i + κ_i ΔV, −c_i, c_i),   Δz_i = ΔV − Δt_i/κ_i,
+
+booking the dissipation ½(t_old + t_new) Δz_i. Both steps serve the half-space slider bed
+(:mod:`slipcycle.halfspace.kernels`, after Jäger's slider representation of Mindlin
+contacts; also the Ŵ map, which drives the same bed) and the rod interfaces: rings, a single
+Jenkins element and the Segalman–Iwan element discretised as a bed
+(:mod:`slipcycle.rods.kernels`). The kernel belongs to neither model, so neither imports
+the other.
 """
 
 from __future__ import annotations
@@ -21,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["solve_tangential_force"]
+__all__ = ["solve_tangential_force", "apply_increment"]
 
 _MAX_NEWTON = 60
 
@@ -138,3 +146,69 @@ def solve_tangential_force(t, kt, cap, target, guess):
     q, s = _force_and_slope(t, kt, cap, x)
     dv, it = _newton(t, kt, cap, target, x, q - target, s, lo, hi, qmax)
     return dv, it + 2
+
+
+@njit(cache=True)
+def apply_increment(t, k, k_step, cap, dv, d, z, slip, slip_tol):
+    """Move every element of a bed by the common increment ΔV; updates the state in place.
+
+    Element i takes the share ``k_step[i] / k[i]`` of ΔV (1 for an element in contact over
+    the whole step; less for a slider of the half-space bed that touches during the step,
+    which carries only the displacement after it touches), i.e. its trial force is
+    t_i + k_step[i] ΔV, returned to [−c_i, c_i].
+
+    Parameters
+    ----------
+    t : (n,) array
+        Element forces (N, or N m for rotations), updated.
+    k, k_step : (n,) arrays
+        Element stiffnesses and the stiffnesses they show over this step (N/m or N m/rad).
+    cap : (n,) array
+        Limits c_i ≥ 0 at the end of the step.
+    dv : float
+        The common displacement (rotation) increment ΔV.
+    d : (n,) array
+        Dissipation per element (J), incremented by ½(t_old + t_new)(ΔV − Δt_i/k_i): booked
+        against the common ΔV, so that Σ_i d_i is the trapezoidal ∮Q dV exactly.
+    z, slip : (n,) arrays
+        Accumulated slip of each element (m or rad) and its absolute value while the limit
+        is positive (an element leaving contact releases its force; that is not slip).
+    slip_tol : float
+        An element counts as slipping when its trial force exceeds its limit by more than
+        ``slip_tol`` times the limit (so an element brought back exactly to its limit, as on
+        a proportional path, is not slipping because of rounding).
+
+    Returns
+    -------
+    q : float
+        The total force Σ t_i after the step.
+    n_slip : int
+        Number of slipping elements.
+    first : int
+        Index of the lowest slipping element (n if none).
+    """
+    n = t.size
+    first = n
+    q = 0.0
+    n_slip = 0
+    for i in range(n):
+        told = t[i]
+        x = told + k_step[i] * dv
+        c = cap[i]
+        if x > c or x < -c:
+            tn = c if x > c else -c
+            dz = dv * k_step[i] / k[i] - (tn - told) / k[i]
+            if c > 0.0 and abs(x) - c > slip_tol * c:
+                n_slip += 1
+                if i < first:
+                    first = i
+        else:
+            tn = x
+            dz = 0.0
+        d[i] += 0.5 * (told + tn) * (dv - (tn - told) / k[i])
+        z[i] += dz
+        if c > 0.0:
+            slip[i] += abs(dz)
+        t[i] = tn
+        q += tn
+    return q, n_slip, first

@@ -14,7 +14,8 @@ step, or the wave impedance). With y = δ_new − δ_old this is
 
 a force-controlled step of the bed with one extra linear element of stiffness 1/C, which the
 Jenkins-bed kernel :func:`slipcycle.kernels.jenkins.solve_tangential_force` (shared with
-the half-space slider bed) solves exactly. Rigid-plastic interfaces (``coulomb``, and
+the half-space slider bed) solves exactly; :func:`slipcycle.kernels.jenkins.apply_increment`
+then moves the elements (the same return map as the slider bed's). Rigid-plastic interfaces (``coulomb``, and
 ``welded`` with infinite capacity) are the closed-form limit κ → ∞: T_new = clip(δ_pred −
 δ_old)/C, ±c).
 """
@@ -24,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from slipcycle.kernels.jenkins import solve_tangential_force
+from slipcycle.kernels.jenkins import apply_increment, solve_tangential_force
 
 __all__ = ["bed_step", "integrate"]
 
@@ -85,20 +86,8 @@ def bed_step(t, kappa, cap, rigid, target, C, guess, wt, wk, wc, d):
     wk[n] = 1.0 / C
     wc[n] = 2.0 * (abs(target) + capsum) + 1e-300
     y, _ = solve_tangential_force(wt, wk, wc, target, guess)
-    T = 0.0
-    for i in range(n):
-        told = t[i]
-        x = told + kappa[i] * y
-        c = cap[i]
-        if x > c:
-            tn = c
-        elif x < -c:
-            tn = -c
-        else:
-            tn = x
-        d[i] += 0.5 * (told + tn) * (y - (tn - told) / kappa[i])
-        t[i] = tn
-        T += tn
+    # the slip records of the shared kernel are not needed here: the work arrays take them
+    T, _, _ = apply_increment(t, kappa, kappa, cap, y, d, wt[:n], wc[:n], 0.0)
     return T, y
 
 
