@@ -142,7 +142,8 @@ def _search(A: np.ndarray, Bt: np.ndarray):
             c2 = s2 * (b11 * b22 - b12 * b21)
             kap = np.full(i.size, np.inf)
             lin = np.abs(c2) <= 1e-14 * (np.abs(c1) + np.abs(c0))
-            with np.errstate(divide="ignore", invalid="ignore"):
+            # huge stiffness ratios overflow the discriminant: no finite root, as wanted
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 kl = np.where(lin & (c1 != 0), np.abs(c0 / c1), np.inf)
                 disc = c1 * c1 - 4 * c2 * c0
                 sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
