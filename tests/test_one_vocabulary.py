@@ -12,11 +12,11 @@ from __future__ import annotations
 import math
 
 import pytest
+from conftest import case_text
 
 import slipcycle
 from slipcycle.io.case import CaseError
 from slipcycle.result import RunResult, SteadyState
-from conftest import case_text
 
 SHARED_FIELDS = ("steady_state", "dissipation_per_cycle", "cycles_run", "residual",
                  "converged", "message")

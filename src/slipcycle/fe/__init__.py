@@ -1,4 +1,8 @@
-"""Static reduction of 2-D plane-strain finite-element models to contact nodes (Python API).
+"""Static reduction of finite-element models to contact nodes (Python API).
+
+2-D plane-strain models (below) and 3-D tetrahedral bodies on a rigid flat
+(:func:`block_on_rigid_3d`, :func:`reduce_on_rigid_flat`, returning a
+:class:`slipcycle.io.matrices.ReducedStiffness` with two tangential directions per node).
 
 Build a :class:`Problem` with a geometry builder, condense it with :func:`reduce_problem`
 and use the :class:`ReducedModel` (A, B, C and the load vectors p^w, q^w per basic load
@@ -27,6 +31,7 @@ _LAZY = {
     "reduce_problem": "reduction",
     "combined_loads": "loads",
     "coupling_ratio": "checks", "dundurs_beta": "checks",
+    "Block3D": "solid3d", "block_on_rigid_3d": "solid3d", "reduce_on_rigid_flat": "solid3d",
 }
 
 __all__ = list(_LAZY)

@@ -24,12 +24,14 @@ import scipy.sparse as sp
 from skfem import (
     Basis,
     BilinearForm,
+    ElementTetP0,
     ElementTriP0,
     ElementTriP1,
     ElementTriP2,
     ElementVector,
     FacetBasis,
     LinearForm,
+    MeshTet,
     asm,
 )
 from skfem.helpers import ddot, div, sym_grad
@@ -101,7 +103,10 @@ def node_dofs(basis: Basis) -> tuple[np.ndarray, np.ndarray]:
 
 def stiffness(basis: Basis, E: float, nu: float, thickness: float = 1.0,
               formulation: str = "displacement") -> sp.csr_matrix:
-    """Plane-strain stiffness matrix, N/m (symmetric positive semi-definite, unsupported).
+    """Linear-elastic stiffness matrix, N/m (symmetric positive semi-definite, unsupported).
+
+    Plane strain on a triangle mesh (per ``thickness``), or 3-D on a tetrahedral mesh
+    (``thickness`` must then be 1).
 
     ``formulation="displacement"`` integrates the full strain energy. ``"mixed"`` keeps
     the deviatoric part 2μ ε:ε and replaces the volumetric part λ (div u)² by its
@@ -123,20 +128,24 @@ def stiffness(basis: Basis, E: float, nu: float, thickness: float = 1.0,
     def divergence(u, q, w):
         return div(u) * q
 
-    b0 = basis.with_element(ElementTriP0())
+    b0 = basis.with_element(ElementTetP0() if isinstance(basis.mesh, MeshTet)
+                            else ElementTriP0())
     D = asm(divergence, basis, b0)
     if D.shape[0] != b0.N:
         D = D.T
-    area = _element_areas(basis.mesh)  # P0 mass matrix is diag(area)
+    area = _element_measures(b0)  # P0 mass matrix is diag(area or volume)
     K = asm(deviatoric, basis) + lam * (D.T @ sp.diags(1.0 / area) @ D)
     return (thickness * K).tocsr()
 
 
-def _element_areas(mesh) -> np.ndarray:
-    p, t = mesh.p, mesh.t
-    a = p[:, t[1]] - p[:, t[0]]
-    b = p[:, t[2]] - p[:, t[0]]
-    return 0.5 * np.abs(a[0] * b[1] - a[1] * b[0])
+@LinearForm
+def _one(v, w):
+    return v
+
+
+def _element_measures(b0: Basis) -> np.ndarray:
+    """Area (triangles) or volume (tetrahedra) of each element: ∫ of its P0 basis function."""
+    return asm(_one, b0)
 
 
 def default_formulation(element: str, nu: float) -> str:

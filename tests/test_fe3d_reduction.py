@@ -1,0 +1,98 @@
+"""Three-dimensional FE reduction of a body on a rigid flat (slipcycle.fe.solid3d).
+
+The reduced stiffness of the contact nodes, in their (t1, t2, n) frames, must be
+symmetric positive definite; a rigid translation of the whole body (top face and contact
+nodes together) must produce no reaction; and the normal contact of a parabolic gap (the
+Hertz geometry of a sphere of radius R on a flat) must reach the Hertz contact radius
+a = (3 P R / 4 E*)^{1/3} (Johnson 1985, §4.2) to within the node spacing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.linalg import cholesky, solve_triangular
+from scipy.optimize import nnls
+
+from slipcycle.errors import InputError
+from slipcycle.fe.solid3d import Block3D, block_on_rigid_3d
+
+E, NU, R = 200e9, 0.3, 0.05
+
+
+@pytest.fixture(scope="module")
+def small():
+    return block_on_rigid_3d(Block3D(width_x=0.02, width_y=0.02, height=0.01, E=E, nu=NU,
+                                     contact_x=0.006, contact_y=0.006, elements=2,
+                                     element="P2", radius=R))
+
+
+def test_reduced_stiffness_is_spd_with_two_tangential_directions(small):
+    N = small.C.shape[0]
+    assert small.tangential_dims == 2
+    assert small.A.shape == (2 * N, 2 * N) and small.B.shape == (N, 2 * N)
+    K = np.block([[small.A, small.B.T], [small.B, small.C]])
+    assert np.allclose(K, K.T, rtol=0, atol=1e-10 * np.abs(K).max())
+    assert np.linalg.eigvalsh(K).min() > 0
+
+
+def test_rigid_translation_of_the_whole_body_gives_no_reaction(small):
+    """Top face and contact nodes moved together: q = q^w + A v + Bᵀ w = 0, p = 0."""
+    N = small.C.shape[0]
+    scale = np.abs(small.C).max()
+    ones = np.ones(N)
+    # normal: top 1 m towards the flat, every contact node too (w = −1)
+    q = small.loads["normal"]["q"] - small.B.T @ ones
+    p = small.loads["normal"]["p"] - small.C @ ones
+    assert np.abs(q).max() <= 1e-8 * scale and np.abs(p).max() <= 1e-8 * scale
+    for name, comp in (("tangential", 0), ("tangential2", 1)):
+        v = np.zeros(2 * N)
+        v[comp::2] = 1.0
+        q = small.loads[name]["q"] + small.A @ v
+        p = small.loads[name]["p"] + small.B @ v
+        assert np.abs(q).max() <= 1e-8 * scale and np.abs(p).max() <= 1e-8 * scale
+
+
+def test_gap_case_is_minus_the_stiffness_times_the_gap(small):
+    g = (small.coordinates[:, 0] ** 2 + small.coordinates[:, 1] ** 2) / (2 * R)
+    assert np.allclose(small.loads["gap"]["p"], -small.C @ g)
+    assert np.allclose(small.loads["gap"]["q"], -small.B.T @ g)
+
+
+def _normal_contact(red, delta):
+    """Signorini problem p = p^w + C w ≥ 0, w ≥ 0, p·w = 0 as min ½wᵀCw + p^wᵀw, w ≥ 0."""
+    pw = delta * red.loads["normal"]["p"] + red.loads["gap"]["p"]
+    L = cholesky(red.C, lower=True)
+    w, _ = nnls(L.T, -solve_triangular(L, pw, lower=True), maxiter=100 * pw.size)
+    return w, pw + red.C @ w
+
+
+@pytest.mark.slow
+def test_hertz_contact_radius_within_the_node_spacing():
+    red = block_on_rigid_3d(Block3D(width_x=0.04, width_y=0.04, height=0.02, E=E, nu=NU,
+                                    contact_x=0.008, contact_y=0.008, elements=4,
+                                    radius=R))
+    spacing = 0.008 / 4 / 2  # P2: vertices and mid-points
+    Estar = E / (1 - NU**2)
+    for delta in (6e-5, 1e-4):
+        w, p = _normal_contact(red, delta)
+        assert p.min() >= -1e-9 * p.max()
+        P = p.sum()
+        a_hertz = (3 * P * R / (4 * Estar)) ** (1 / 3)
+        x, y = red.coordinates[:, 0], red.coordinates[:, 1]
+        axis = np.abs(y) < 1e-12
+        closed = w <= 1e-12 * np.abs(w).max()
+        a_in = np.abs(x[axis & closed]).max()
+        a_out = np.abs(x[axis & ~closed]).min()
+        assert a_in <= a_hertz + spacing and a_out >= a_hertz - spacing
+
+
+def test_block_refuses_bad_input_with_the_key():
+    with pytest.raises(InputError) as err:
+        Block3D(width_x=0.02, width_y=0.02, height=0.01, E=E, nu=0.5, contact_x=0.006,
+                contact_y=0.006)
+    assert err.value.key == "nu"
+    with pytest.raises(InputError) as err:
+        Block3D(width_x=0.02, width_y=0.02, height=0.01, E=E, nu=NU, contact_x=0.03,
+                contact_y=0.006)
+    assert err.value.key == "contact_x"
