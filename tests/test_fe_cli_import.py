@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from slipcycle.fe.condense import schur_complement
+from slipcycle.condensation import schur_complement
 from slipcycle.io.matrices import read_stiffness
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 BLOCK = """
 model = "fe"

@@ -13,7 +13,7 @@ import numpy as np
 from slipcycle.fe.model import build_problem, discrete_case_text, read_discrete_table
 from slipcycle.fe.reduction import reduce_problem
 from slipcycle.io import CaseError, read_case
-from slipcycle.io.matrices import StiffnessError, check_stiffness, read_stiffness
+from slipcycle.io.matrices import StiffnessError, check_stiffness, read_reduced_stiffness
 from slipcycle.io.results import provenance, write_together
 
 __all__ = ["import_stiffness", "reduce_model"]
@@ -30,7 +30,9 @@ def import_stiffness(model: Path, out: Path, dof_order: str | None = None) -> di
     Parameters
     ----------
     model : Path
-        ``.mtx`` or ``.npz`` file with A, B, C (or a full K and its DOF ordering).
+        A reduced stiffness in any format :func:`slipcycle.io.matrices.
+        read_reduced_stiffness` reads (``.npz``, Matrix Market, Abaqus/CalculiX ``.mtx``,
+        Harwell–Boeing, MATLAB ``.mat``, Nastran DMIG).
     out : Path
         The ``.npz`` file written (atomically), with provenance metadata.
     dof_order : {"tangential_first", "interleaved"}, optional
@@ -49,16 +51,20 @@ def import_stiffness(model: Path, out: Path, dof_order: str | None = None) -> di
     """
     if not model.exists():
         raise CaseError("model", f"file not found: {model}")
-    try:
-        data = read_stiffness(model, dof_order)
+    try:  # every export format slipcycle reads (docs/discrete.md), one reader
+        red = read_reduced_stiffness(model, dof_map=dof_order)
     except StiffnessError as exc:
-        raise CaseError(f"{model.name}:{exc.key}", exc.problem) from None
+        # a problem of the file as a whole is a problem of its stiffness K
+        key = "K" if exc.key in (str(model), model.name) else exc.key
+        raise CaseError(f"{model.name}:{key}", exc.problem) from None
     except ValueError as exc:
         raise CaseError(model.name, str(exc)) from None
     meta = provenance("", model.resolve())
     meta["imported_from"] = str(model)
-    data = {k: v for k, v in data.items() if k != "metadata"}
+    meta["source"] = red.source
+    data = dict(red.to_arrays())
     data["dof_order"] = np.array("tangential_first")
+    data["tangential_dims"] = np.array(red.tangential_dims)
     data["metadata"] = np.array(json.dumps(meta))
     write_together([(out, lambda tmp: _savez(tmp, data))])
     n = data["A"].shape[0]

@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from slipcycle.condensation import schur_complement
 from slipcycle.fe.assembly import BodyDofs
-from slipcycle.fe.condense import schur_complement
 from slipcycle.fe.contact import ContactSet
 from slipcycle.materials import dundurs_beta
 from slipcycle.result import _Contract, _fmt, _html_table
@@ -391,7 +391,7 @@ def reduce_problem(problem: Problem, block: int = 128) -> ReducedModel:
 
     With u = T z + u₀, z = [y; v; w − g], the transformed stiffness K' = Tᵀ K T is
     condensed onto the contact variables, K_red = K'_dd − K'_dy K'_yy⁻¹ K'_yd (one sparse
-    factorisation, :func:`slipcycle.fe.condense.schur_complement`), so that
+    factorisation, :func:`slipcycle.condensation.schur_complement`), so that
     [q; p] = K_red [v; w] + [q^w; p^w] with K_red = [[A, Bᵀ], [B, C]].
 
     Parameters
@@ -417,7 +417,7 @@ def reduce_problem(problem: Problem, block: int = 128) -> ReducedModel:
 
     Raises
     ------
-    slipcycle.fe.condense.SingularModelError
+    slipcycle.condensation.SingularModelError
         The stiffness with every contact node held is singular: a body or part of one
         is not supported against rigid motion.
     ValueError

@@ -4,7 +4,7 @@ A tetrahedral scikit-fem model of body 1 (quadratic ``P2`` by default; P2–P0 m
 ν = 0.5, :func:`slipcycle.fe.assembly.stiffness`) rests on a rigid flat z = z₀ with the
 initial gap g(x, y) ≥ 0 at each candidate contact node. Its top face is moved rigidly by
 the load cases. Every degree of freedom that is neither a contact dof nor prescribed is
-condensed out with one sparse factorisation (:func:`slipcycle.fe.condense.
+condensed out with one sparse factorisation (:func:`slipcycle.condensation.
 schur_complement`, Guyan 1965), leaving the reduced stiffness of the N contact nodes in
 their local frames (t1 = x, t2 = y, and the flat's normal n = z into body 1):
 
@@ -45,9 +45,9 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
 
+from slipcycle.condensation import schur_complement
 from slipcycle.errors import InputError
 from slipcycle.fe.assembly import default_formulation, stiffness
-from slipcycle.fe.condense import schur_complement
 from slipcycle.fe.geometry import check_number, depth_grid, interface_grid
 from slipcycle.io.matrices import ReducedStiffness
 

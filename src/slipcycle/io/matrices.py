@@ -1,37 +1,63 @@
-"""Reading reduced stiffness matrices from files (``.npz`` or Matrix Market ``.mtx``).
+"""Reduced contact stiffness from files: slipcycle's ``.npz``, Matrix Market and the exports
+of FE codes (Abaqus, CalculiX, ANSYS HBMAT / Harwell–Boeing, MATLAB ``.mat``, Nastran DMIG).
 
-An ``.npz`` file holds arrays named ``A``, ``B``, ``C`` (N×N) and optionally ``p_w``,
-``q_w`` (reactions of basic load cases, (n_cases, N)), ``coords`` (N, 2) and ``dof_order``.
-A ``.mtx`` file holds the full reduced K (2N×2N); its degree-of-freedom ordering is
-``"tangential_first"`` ([v1..vN, w1..wN], the default) or ``"interleaved"``
-([v1, w1, v2, w2, ...]). The ordering can be stated in the file (``.npz``: a string
-array ``dof_order``; ``.mtx``: a comment line ``% dof_order: interleaved``) or passed by
-the caller; when both are given they must agree.
+:func:`read_reduced_stiffness` reads any of them into a :class:`ReducedStiffness`, for 2-D
+(one tangent per node) and 3-D (two tangents) contacts; :func:`read_case_stiffness` does so
+for the ``stiffness_file`` key of a case. The layouts are described in
+:mod:`slipcycle.io.fe_formats`; roles of the rows, node frames and the condensation of
+retained rows in :mod:`slipcycle.io.fe_formats.dofmap`.
 
-:func:`check_stiffness` applies the import checks: A, B, C square N×N,
-finite, K = [[A, Bᵀ], [B, C]] symmetric (relative asymmetry ≤ ``rtol``; the symmetric
-part is used) and positive definite (Cholesky), load arrays (n_cases, N). Sign
-conventions: v tangential slip, w normal separation, p compressive positive,
-q = q^w + A v + Bᵀ w, p = p^w + B v + C w.
+Sign conventions (those of :mod:`slipcycle.discrete.model`; J. R. Barber, J. Phys.: Conf.
+Ser. 382 (2012) 012002, §3): v is the tangential slip and w the normal separation of a
+contact node (w > 0 opens the gap); q, p are the reactions on the body, p compressive
+positive; K = [[A, Bᵀ], [B, C]] with
+
+    q = q^w + A v + Bᵀ w,      p = p^w + B v + C w.
+
+A node frame is given by its outward unit normal n (out of the body, into the contact):
+w and p act along −n; the tangents t1 (, t2) follow the rule of
+:func:`slipcycle.io.fe_formats.dofmap.node_frames` unless given. In 3-D the tangential
+block A is node-major: (node 0 t1, node 0 t2, node 1 t1, ...).
+
+The original readers stay: an ``.npz`` file holds arrays ``A``, ``B``, ``C`` (N×N) and
+optionally ``p_w``, ``q_w`` (reactions of basic load cases, (n_cases, N)), ``coords``
+(N, 2) and ``dof_order``. A ``.mtx`` file holds the full reduced K (2N×2N); its
+degree-of-freedom ordering is ``"tangential_first"`` ([v1..vN, w1..wN], the default) or
+``"interleaved"`` ([v1, w1, v2, w2, ...]), stated in the file (``.npz``: a string array
+``dof_order``; ``.mtx``: a comment line ``% dof_order: interleaved``) or passed by the
+caller; when both are given they must agree. :func:`check_stiffness` applies the import
+checks: A, B, C square N×N, finite, K symmetric (relative asymmetry ≤ ``rtol``; the
+symmetric part is used) and positive definite (Cholesky), load arrays (n_cases, N).
 """
 
 from __future__ import annotations
 
 import zipfile
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.io import mmread
 
-from slipcycle.errors import InputError
+from slipcycle.io.case import CaseError, Section
+from slipcycle.io.fe_formats import FORMATS, detect_format, read_raw
+from slipcycle.io.fe_formats.common import RawMatrix, StiffnessError, file_error
+from slipcycle.io.fe_formats.dofmap import (
+    ORDERINGS,
+    DofMap,
+    labelled_map,
+    node_frames,
+    read_dof_table,
+    reduce_to_contact,
+    standard_map,
+    table_map,
+)
 
 __all__ = ["read_stiffness", "stiffness_nodes", "split_stiffness", "check_stiffness",
-           "mtx_dof_order", "StiffnessError", "DOF_ORDERS"]
+           "mtx_dof_order", "StiffnessError", "DOF_ORDERS", "ReducedStiffness",
+           "read_reduced_stiffness", "read_case_stiffness", "FORMATS", "detect_format"]
 
 DOF_ORDERS = ("tangential_first", "interleaved")
-
-
-class StiffnessError(InputError):
-    """A reduced stiffness file is inconsistent; ``key`` names the offending array."""
 
 
 def _resolve_order(stated: str | None, given: str | None, where: str) -> str:
@@ -243,8 +269,6 @@ def read_stiffness(path: str | Path, dof_order: str | None = None, *, check: boo
         if missing:
             raise ValueError(f"{path.name} lacks array(s) {', '.join(missing)}")
     elif suffix == ".mtx":
-        from scipy.io import mmread
-
         order = _resolve_order(mtx_dof_order(path), dof_order, path.name)
         K = mmread(str(path))
         K = K.toarray() if hasattr(K, "toarray") else np.asarray(K)
@@ -254,3 +278,455 @@ def read_stiffness(path: str | Path, dof_order: str | None = None, *, check: boo
     if check:
         return check_stiffness(out, rtol)
     return out
+
+
+# -- reduced stiffness of 2-D and 3-D contacts from any supported export ----------------------
+
+def _readonly(a):
+    if a is None:
+        return None
+    a = np.array(a)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class ReducedStiffness:
+    """Reduced contact stiffness K = [[A, Bᵀ], [B, C]] of N contact nodes.
+
+    The blocks map the relative displacements of the contact nodes (tangential slip v,
+    normal separation w, w > 0 opening) to the reactions on the body (q tangential, p
+    normal, compressive positive): q = q^w + A v + Bᵀ w, p = p^w + B v + C w (Barber,
+    J. Phys.: Conf. Ser. 382 (2012) 012002, §3; the convention of
+    :mod:`slipcycle.discrete.model`). K is checked symmetric (relative asymmetry ≤ 1e-6,
+    its symmetric part kept) and positive definite on construction.
+
+    Attributes
+    ----------
+    A : numpy.ndarray, shape (t N, t N)
+        Tangential block, N/m; node-major (node 0 t1, node 0 t2, node 1 t1, ...).
+    B : numpy.ndarray, shape (N, t N)
+        Normal force per unit slip, N/m.
+    C : numpy.ndarray, shape (N, N)
+        Normal block, N/m.
+    tangential_dims : int
+        t: 1 (2-D) or 2 (3-D).
+    nodes : numpy.ndarray of int, shape (N,)
+        Node labels from the source file (0..N−1 if it has none), increasing.
+    coordinates : numpy.ndarray, shape (N, 3), or None
+        Node coordinates, m.
+    normals : numpy.ndarray, shape (N, 3), or None
+        Outward unit normals (out of the body, into the contact); w and p act along −n.
+    tangents : numpy.ndarray, shape (N, t, 3), or None
+        Unit tangents t1 (, t2) of each node.
+    loads : dict of str to dict
+        Load cases read with K: name → {"q": (t N,), "p": (N,)}, the reactions with every
+        contact node held (q^w, p^w per unit of the case), N.
+    source : str
+        File and format, for provenance.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    tangential_dims: int = 1
+    nodes: np.ndarray | None = None
+    coordinates: np.ndarray | None = None
+    normals: np.ndarray | None = None
+    tangents: np.ndarray | None = None
+    loads: dict = field(default_factory=dict)
+    source: str = ""
+
+    def __post_init__(self):
+        t = self.tangential_dims
+        if t not in (1, 2):
+            raise StiffnessError("tangential_dims", f"must be 1 (2-D) or 2 (3-D), got {t!r}")
+        C = np.asarray(self.C, float)
+        if C.ndim != 2 or C.shape[0] != C.shape[1] or C.shape[0] == 0:
+            raise StiffnessError("C", f"must be a non-empty square N×N matrix, got shape "
+                                 f"{C.shape}")
+        n = C.shape[0]
+        A = np.asarray(self.A, float)
+        B = np.asarray(self.B, float)
+        for name, M, shape in (("A", A, (t * n, t * n)), ("B", B, (n, t * n))):
+            if M.shape != shape:
+                raise StiffnessError(name, f"wrong shape: expected {shape[0]}×{shape[1]} for "
+                                     f"{n} nodes with {t} tangential direction(s), got "
+                                     f"{'×'.join(map(str, M.shape))}")
+        for name, M in (("A", A), ("B", B), ("C", C)):
+            if not np.all(np.isfinite(M)):
+                raise StiffnessError(name, "must contain only finite numbers (found nan or "
+                                     "inf)")
+        K = np.block([[A, B.T], [B, C]])
+        scale = np.linalg.norm(K)
+        asym = np.linalg.norm(K - K.T) / scale if scale > 0 else 0.0
+        if asym > 1e-6:
+            raise StiffnessError("K", f"not symmetric: relative asymmetry {asym:.2e} > 1e-06 "
+                                 "(K = [[A, Bᵀ], [B, C]])")
+        K = 0.5 * (K + K.T)
+        try:
+            np.linalg.cholesky(K)
+        except np.linalg.LinAlgError:
+            lam = np.linalg.eigvalsh(K)
+            raise StiffnessError("K", f"not positive definite: smallest eigenvalue "
+                                 f"{lam[0]:.3e} (largest {lam[-1]:.3e}); a reduced stiffness "
+                                 "must be SPD — is the body supported against rigid "
+                                 "motion?") from None
+        tn = t * n
+        nodes = np.arange(n) if self.nodes is None else np.asarray(self.nodes)
+        if nodes.shape != (n,) or not np.issubdtype(nodes.dtype, np.integer):
+            raise StiffnessError("nodes", f"must be {n} integer node labels")
+        if np.unique(nodes).size != n:
+            raise StiffnessError("nodes", "node labels must be distinct")
+        for name, shape in (("coordinates", (n, 3)), ("normals", (n, 3)),
+                            ("tangents", (n, t, 3))):
+            v = getattr(self, name)
+            if v is not None:
+                v = np.asarray(v, float)
+                if v.shape != shape or not np.all(np.isfinite(v)):
+                    raise StiffnessError(name, f"must be finite with shape {shape}, got "
+                                         f"{v.shape}")
+                if name != "coordinates" and np.max(np.abs(np.linalg.norm(v, axis=-1) - 1)) > 1e-6:
+                    raise StiffnessError(name, "must be unit vectors")
+                object.__setattr__(self, name, _readonly(v))
+        loads = {}
+        for name, case in dict(self.loads).items():
+            try:
+                q = np.asarray(case["q"], float)
+                p = np.asarray(case["p"], float)
+            except (KeyError, TypeError, ValueError):
+                raise StiffnessError(f"loads.{name}", "must be {'q': (tN,), 'p': (N,)}") from None
+            if q.shape != (tn,) or p.shape != (n,):
+                raise StiffnessError(f"loads.{name}", f"q must have {tn} and p {n} entries, "
+                                     f"got {q.size} and {p.size}")
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(p))):
+                raise StiffnessError(f"loads.{name}", "must contain only finite numbers")
+            loads[str(name)] = {"q": _readonly(q), "p": _readonly(p)}
+        object.__setattr__(self, "A", _readonly(K[:tn, :tn]))
+        object.__setattr__(self, "B", _readonly(K[tn:, :tn]))
+        object.__setattr__(self, "C", _readonly(K[tn:, tn:]))
+        object.__setattr__(self, "nodes", _readonly(nodes.astype(np.int64)))
+        object.__setattr__(self, "loads", loads)
+
+    @property
+    def n_nodes(self) -> int:
+        """N, the number of contact nodes."""
+        return self.C.shape[0]
+
+    @property
+    def K(self) -> np.ndarray:
+        """The full reduced stiffness [[A, Bᵀ], [B, C]], ((t+1)N, (t+1)N), N/m."""
+        return np.block([[self.A, self.B.T], [self.B, self.C]])
+
+    def to_arrays(self) -> dict:
+        """The arrays of slipcycle's ``.npz`` layout: ``A``, ``B``, ``C`` and, when load
+        cases were read, ``p_w`` (n_cases, N), ``q_w`` (n_cases, t N) and ``load_cases``;
+        ``coords`` when coordinates are known."""
+        out = {"A": self.A, "B": self.B, "C": self.C}
+        if self.loads:
+            names = list(self.loads)
+            out["p_w"] = np.array([self.loads[k]["p"] for k in names])
+            out["q_w"] = np.array([self.loads[k]["q"] for k in names])
+            out["load_cases"] = np.array(names, dtype=str)
+        if self.coordinates is not None:
+            out["coords"] = self.coordinates
+        return out
+
+    def __repr__(self) -> str:
+        dims = "3-D" if self.tangential_dims == 2 else "2-D"
+        return (f"<ReducedStiffness {self.n_nodes} nodes, {dims}, "
+                f"loads={list(self.loads)}, source={self.source!r}>")
+
+
+def _raw_npz(path: Path, keys: dict | None) -> RawMatrix:
+    """An ``.npz``: blocks A, B, C (with loads, coordinates, frames) or a full K."""
+    try:
+        data = _read_npz(path)
+    except ValueError as exc:
+        raise file_error(path, str(exc)) from None
+    names = {"A": "A", "B": "B", "C": "C", "K": "K", **(keys or {})}
+    stated = {}
+    if "dof_order" in data:
+        stated["dof_order"] = str(data["dof_order"])
+    if "tangential_dims" in data:
+        stated["tangential_dims"] = int(data["tangential_dims"])
+    if all(names[k] in data for k in ("A", "B", "C")):
+        extra = {k: data[names[k]] for k in ("A", "B", "C")}
+        for k in ("p_w", "q_w", "load_cases", "coords", "normal", "tangent"):
+            if k in data:
+                extra[k] = data[k]
+        return RawMatrix(None, stated=stated, extra=extra, format="npz")
+    if names["K"] in data:
+        labels = data["dof_labels"] if "dof_labels" in data else None
+        return RawMatrix(np.asarray(data[names["K"]], float), labels=labels, stated=stated,
+                         format="npz")
+    missing = [names[k] for k in ("A", "B", "C") if names[k] not in data]
+    raise file_error(path, f"lacks array(s) {', '.join(missing)} (or a full {names['K']})")
+
+
+def _raw_mtx(path: Path) -> RawMatrix:
+    """A Matrix Market file: the full K; ``% dof_order:`` / ``% tangential_dims:`` comments."""
+    stated = {}
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            if not line.startswith("%"):
+                break
+            text = line.lstrip("%").strip()
+            for word in ("dof_order", "tangential_dims"):
+                if text.lower().startswith(word):
+                    stated[word] = text.split(":", 1)[-1].split("=", 1)[-1].strip()
+    if "tangential_dims" in stated:
+        try:
+            stated["tangential_dims"] = int(stated["tangential_dims"])
+        except ValueError:
+            raise file_error(path, "the comment '% tangential_dims:' must be 1 or 2") from None
+    try:
+        K = mmread(str(path))
+    except (ValueError, OSError, IndexError, TypeError) as exc:
+        raise file_error(path, f"not a readable Matrix Market file: {exc}") from None
+    return RawMatrix(K.tocsr() if hasattr(K, "tocsr") else np.asarray(K, float), stated=stated,
+                     format="matrix-market")
+
+
+def _dof_map(raw: RawMatrix, dof_map, tangential_dims: int | None, where: str) -> DofMap:
+    """The roles of the rows of ``raw`` (see :mod:`slipcycle.io.fe_formats.dofmap`)."""
+    n = raw.K.shape[0] if raw.transform is None else raw.transform.shape[0]
+    if isinstance(dof_map, DofMap):
+        return dof_map
+    stated_order = raw.stated.get("dof_order")
+    stated_t = raw.stated.get("tangential_dims")
+    if stated_t is not None and stated_t not in (1, 2):
+        raise file_error(where, f"states tangential_dims = {stated_t!r}; must be 1 or 2")
+    if stated_t is not None and tangential_dims is not None and stated_t != tangential_dims:
+        raise file_error(where, f"states tangential_dims = {stated_t} ("
+                         f"{'3-D' if stated_t == 2 else '2-D'}) but a "
+                         f"{'3-D' if tangential_dims == 2 else '2-D'} model needs "
+                         f"{tangential_dims}; the matrix is not reinterpreted")
+    t = tangential_dims or stated_t or 1
+    if dof_map is None:
+        if raw.labels is not None:
+            return labelled_map(raw.labels)
+        return standard_map(n, _resolve_order(stated_order, None, where), t, where)
+    if isinstance(dof_map, str) and dof_map in ORDERINGS:
+        if raw.labels is not None:
+            raise StiffnessError("dof_map", f"{where} labels its rows (node, dof); a standard "
+                                 "ordering does not apply (give a table or leave it out)")
+        if stated_order is not None and stated_order in DOF_ORDERS + ("xyz",) \
+                and stated_order != dof_map:
+            raise StiffnessError("dof_order", f"{where} states {stated_order!r} but "
+                                 f"{dof_map!r} was requested")
+        return standard_map(n, dof_map, t, where)
+    return table_map(read_dof_table(dof_map), n, raw.labels, where)
+
+
+def _from_blocks(raw: RawMatrix, tangential_dims: int | None, where: str) -> dict:
+    """Fields of a ReducedStiffness from a file that holds A, B, C already."""
+    A, B, C = (np.asarray(raw.extra[k], float) for k in ("A", "B", "C"))
+    n = C.shape[0] if C.ndim == 2 else 0
+    t = A.shape[0] // n if n and A.ndim == 2 and A.shape[0] % n == 0 else 1
+    t = raw.stated.get("tangential_dims", t)
+    if tangential_dims is not None and t != tangential_dims:
+        raise file_error(where, f"A is {A.shape[0]}×{A.shape[0]} for {n} nodes: a "
+                         f"{'3-D' if t == 2 else '2-D'} model ({t} tangential direction(s) "
+                         f"per node), but a {'3-D' if tangential_dims == 2 else '2-D'} model "
+                         "needs " f"{tangential_dims}; the matrix is not reinterpreted")
+    loads = {}
+    if "p_w" in raw.extra and "q_w" in raw.extra:
+        pw = np.atleast_2d(np.asarray(raw.extra["p_w"], float))
+        qw = np.atleast_2d(np.asarray(raw.extra["q_w"], float))
+        if pw.shape[0] != qw.shape[0]:
+            raise file_error(where, f"p_w has {pw.shape[0]} load cases but q_w {qw.shape[0]}")
+        names = ([str(s) for s in np.atleast_1d(raw.extra["load_cases"])]
+                 if "load_cases" in raw.extra else [f"case{k}" for k in range(pw.shape[0])])
+        if len(names) != pw.shape[0]:
+            names = [f"case{k}" for k in range(pw.shape[0])]
+        loads = {name: {"q": qw[k], "p": pw[k]} for k, name in enumerate(names)}
+    coords = None
+    if "coords" in raw.extra:
+        xy = np.asarray(raw.extra["coords"], float)
+        if xy.ndim == 2 and xy.shape[0] == n and xy.shape[1] in (2, 3):
+            coords = np.pad(xy, ((0, 0), (0, 3 - xy.shape[1])))
+    normals = tangents = None
+    if "normal" in raw.extra and "tangent" in raw.extra and t == 1:
+        # slipcycle's FE reduction stores the normal pointing into the body (fe.contact)
+        e = np.pad(np.asarray(raw.extra["normal"], float).ravel(), (0, 1))[:3]
+        tg = np.pad(np.asarray(raw.extra["tangent"], float).ravel(), (0, 1))[:3]
+        if e.shape == (3,) and tg.shape == (3,) and np.isclose(np.linalg.norm(e), 1):
+            normals = np.tile(-e, (n, 1))
+            tangents = np.tile(tg, (n, 1, 1))
+    return {"A": A, "B": B, "C": C, "tangential_dims": t, "coordinates": coords,
+            "normals": normals, "tangents": tangents, "loads": loads}
+
+
+def read_reduced_stiffness(path, *, format: str | None = None,  # noqa: A002 (the API word)
+                           tangential_dims: int | None = None, dof_map=None,
+                           keys: dict | None = None, frames=None,
+                           condense_retained: bool = True,
+                           retained=None, contact_nodes=None) -> ReducedStiffness:
+    """Read a reduced contact stiffness from an ``.npz``, Matrix Market, Abaqus, CalculiX,
+    Harwell–Boeing (ANSYS HBMAT), MATLAB or Nastran DMIG export.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    format : str, optional
+        One of :data:`FORMATS`; inferred from the suffix and contents when None.
+    tangential_dims : {1, 2}, optional
+        1 for a 2-D model, 2 for a 3-D one. A matrix whose nodes carry the other number of
+        dofs is refused, never reinterpreted. None: as the file says (1 for an unlabelled
+        K that states nothing).
+    dof_map : str, path, list of rows or DofMap, optional
+        Roles of the rows (:mod:`slipcycle.io.fe_formats.dofmap`): an ordering
+        (``"tangential_first"``, ``"interleaved"``, ``"xyz"``), a CSV file or list of
+        ``(node, dof, role)`` rows. Default: the file's labels, else its stated ordering,
+        else ``"tangential_first"``.
+    keys : dict, optional
+        Names of the variables holding ``K`` (and ``A``, ``B``, ``C``, ``dof_labels``,
+        ``loads``, and ``L``: physical dofs u = L q of a reduced-order model's coordinates
+        q, as tmdsimpy's ROMs store it) in a ``.mat`` file, of ``A``, ``B``, ``C``, ``K``
+        in an ``.npz``, or ``{"matrix": "KAAX", "loads": "PAX"}`` for DMIG names.
+    frames : dict, optional
+        Node frames, ``{"normal": [nx, ny, nz]}`` (outward normal; one for every node or
+        one per node) and optionally ``"t1"``; needed when the rows are global x, y, z.
+    condense_retained : bool
+        Condense the rows that are not contact directions out (static condensation);
+        False refuses a file that has any.
+    retained : sequence of int, optional
+        Node labels whose every row is retained (condensed out), e.g. interior nodes of an
+        Abaqus substructure.
+    contact_nodes : sequence of int, optional
+        The contact node labels; every row of every other node is retained (for a full
+        model's K, e.g. CalculiX ``.sti``).
+
+    Returns
+    -------
+    ReducedStiffness
+
+    Raises
+    ------
+    StiffnessError
+        One line naming the file (or key) and the problem: unreadable file, wrong format,
+        dof count that does not match the map, a 3-D matrix for a 2-D model (or the
+        reverse), K not symmetric, not positive definite after condensation, NaN.
+    """
+    path = Path(path)
+    where = path.name
+    if not path.is_file():
+        raise file_error(path, "file not found" if not path.exists() else "is not a file")
+    fmt = format or detect_format(path)
+    if fmt not in FORMATS:
+        raise StiffnessError("format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
+    if tangential_dims not in (None, 1, 2):
+        raise StiffnessError("tangential_dims", f"must be 1 or 2, got {tangential_dims!r}")
+    if fmt == "npz":
+        raw = _raw_npz(path, keys)
+    elif fmt == "matrix-market":
+        raw = _raw_mtx(path)
+    else:
+        raw = read_raw(path, fmt, keys)
+    source = f"{path} ({fmt})"
+    if raw.K is None:
+        if dof_map is not None or retained is not None or contact_nodes is not None:
+            raise StiffnessError("dof_map", f"{where} holds the blocks A, B, C already; "
+                                 "a dof map or retained nodes do not apply")
+        fields = _from_blocks(raw, tangential_dims, where)
+        if frames is not None:
+            fields["normals"], fields["tangents"] = node_frames(
+                frames, fields["C"].shape[0], fields["tangential_dims"])
+        return _construct(where, **fields, nodes=None, source=source)
+    dmap = _dof_map(raw, dof_map, tangential_dims, where)
+    if retained is not None:
+        dmap = dmap.with_retained(retained, where)
+    if contact_nodes is not None:
+        dmap = dmap.with_contact_nodes(contact_nodes, where)
+    red = reduce_to_contact(raw.K, dmap, tangential_dims=tangential_dims, frames=frames,
+                            loads=raw.loads, condense_retained=condense_retained, where=where,
+                            transform=raw.transform)
+    coords = None
+    if raw.coordinates and all(int(j) in raw.coordinates for j in red["nodes"]):
+        coords = np.array([raw.coordinates[int(j)] for j in red["nodes"]], float)
+    return _construct(where, A=red["A"], B=red["B"], C=red["C"], tangential_dims=red["t"],
+                      nodes=red["nodes"], coordinates=coords, normals=red["normals"],
+                      tangents=red["tangents"], loads=red["loads"], source=source)
+
+
+def _construct(where: str, **fields) -> ReducedStiffness:
+    """The ReducedStiffness of a file; its checks' errors name the file and the array."""
+    try:
+        return ReducedStiffness(**fields)
+    except StiffnessError as exc:
+        raise file_error(where, f"{exc.key}: {exc.problem}") from None
+
+
+#: option of :func:`read_reduced_stiffness` → key of the ``stiffness`` table of a case
+_CASE_KEYS = {"format": "format", "dof_map": "dof_map", "retained": "retained",
+              "contact_nodes": "contact_nodes", "frames.normal": "normal", "frames.t1": "t1",
+              "frames": "normal", "tangential_dims": "stiffness_file"}
+
+
+def read_case_stiffness(sec: Section, path: Path, tangential_dims: int) -> ReducedStiffness:
+    """The reduced stiffness a case table names: ``stiffness_file`` (``path``) with the
+    optional ``dof_order`` and ``stiffness`` table keys (``format``, ``dof_map``, ``keys``,
+    ``retained``, ``contact_nodes``, ``normal``, ``t1``, ``condense_retained``).
+
+    Parameters
+    ----------
+    sec : Section
+        The model's table (``[discrete]``).
+    path : Path
+        The resolved ``stiffness_file``.
+    tangential_dims : int
+        1 for a 2-D model, 2 for a 3-D one.
+
+    Returns
+    -------
+    ReducedStiffness
+
+    Raises
+    ------
+    CaseError
+        Under the key at fault: ``<table>.stiffness_file`` for the file and its contents,
+        ``<table>.stiffness.<key>`` for an option.
+    """
+    order = (sec.string("dof_order", choices=DOF_ORDERS + ("xyz",))
+             if sec.has("dof_order") else None)
+    st = sec.table("stiffness", None)
+    opts: dict = {}
+    if st is not None:
+        if st.has("format"):
+            opts["format"] = st.string("format", choices=FORMATS)
+        dof_map = st.data.get("dof_map")
+        if isinstance(dof_map, str) and dof_map not in ORDERINGS:
+            opts["dof_map"] = st.path("dof_map")
+        elif dof_map is not None:
+            opts["dof_map"] = dof_map
+            st._used.add("dof_map")
+        keys = st.table("keys", None)
+        if keys is not None:
+            opts["keys"] = {k: keys.string(k) for k in list(keys.data)}
+        for name in ("retained", "contact_nodes"):
+            if st.has(name):
+                v = st.array(name, shape=(None,))
+                if np.any(v != np.round(v)):
+                    raise st.error(name, "must be a list of integer node labels")
+                opts[name] = v.astype(np.int64)
+        frames = {k: st.array(k, shape=(None,)) for k in ("normal", "t1") if st.has(k)}
+        if frames:
+            if "normal" not in frames:
+                raise st.error("normal", "required with t1 (the outward unit normal)")
+            opts["frames"] = frames
+        opts["condense_retained"] = st.bool("condense_retained", True)
+        st.finish()
+    if order is not None:
+        if "dof_map" in opts:
+            raise sec.error("dof_order", "give either dof_order or stiffness.dof_map, not both")
+        opts["dof_map"] = order
+    try:
+        return read_reduced_stiffness(path, tangential_dims=tangential_dims, **opts)
+    except StiffnessError as exc:
+        sub = _CASE_KEYS.get(exc.key) or ("keys" if exc.key.startswith("keys") else None)
+        if sub is None or sub == "stiffness_file" or exc.key == path.name:
+            problem = exc.problem if exc.key == path.name else f"{exc.key}: {exc.problem}"
+            raise CaseError(sec.key("stiffness_file"), f"{path.name}: {problem}") from None
+        raise CaseError(sec.key(f"stiffness.{sub}"), exc.problem) from None

@@ -10,6 +10,9 @@ so that the forces needed at the boundary to hold displacements u_b are S u_b + 
 minimum-degree ordering of Kᵀ+K for the interior, boundary last, symmetric mode,
 diagonal pivots — K is SPD); S is read off the trailing blocks of the factors.
 
+Used by the finite-element reduction (:mod:`slipcycle.fe`) and by the readers of reduced
+models exported from FE codes (:mod:`slipcycle.io.fe_formats`): one condensation engine.
+
 References
 ----------
 Guyan, R. J. (1965). Reduction of stiffness and mass matrices. AIAA Journal 3(2), 380.
@@ -39,7 +42,12 @@ def factorize(K_ii: sp.spmatrix):
             "the stiffness with every contact node held fixed is singular: some body or "
             "part of a body is not supported (check supports, ties and contact tags)"
         ) from exc
-    diag = np.abs(lu.U.diagonal())
+    signed = lu.U.diagonal()
+    if signed.min() < 0.0:  # LU without pivoting of an SPD matrix has positive pivots
+        raise SingularModelError(
+            "the stiffness with every contact node held fixed is not positive definite "
+            f"(a negative pivot, {signed.min():.3e}): check the material constants")
+    diag = np.abs(signed)
     if diag.min() <= 1e-13 * diag.max():
         raise SingularModelError(
             "the stiffness with every contact node held fixed is (nearly) singular: a body "
