@@ -5,7 +5,9 @@ Data flow: a :class:`~slipcycle.halfspace.profiles.Profile` (the normal law P(U)
 approach at which they touch); :func:`~slipcycle.halfspace.history.run_history` drives the
 bed along a load path; :mod:`~slipcycle.halfspace.tractions` turns slider line loads into
 traction and dissipation distributions for axisymmetric profiles; :mod:`~.wmap` computes
-the dimensionless rough-surface dissipation Ŵ(P̂1, Q̂1, φ).
+the dimensionless rough-surface dissipation Ŵ(P̂1, Q̂1, φ); :mod:`~.topography` turns
+measured topography into P(U) by a boundary-element solver and :mod:`~.roughness_study`
+asks which of its wavelengths matter.
 """
 
 from slipcycle.halfspace.bed import SliderBed, make_bed
@@ -22,9 +24,20 @@ from slipcycle.halfspace.profiles import (
     Tabulated,
     sphere,
 )
+from slipcycle.halfspace.topography import (
+    BEMLaw,
+    ExponentialFit,
+    SurfaceMap,
+    TopographySource,
+    bem_normal_law,
+    fit_exponential,
+    read_surface,
+)
 
 __all__ = [
     "ContactElasticity", "Cylinder2D", "FlatPunch", "HalfspaceModel", "HistoryResult",
     "PowerLaw", "Profile", "RoughExponential", "SliderBed", "Tabulated", "contact_loads",
     "make_bed", "run_history", "solve", "sphere",
+    "BEMLaw", "ExponentialFit", "SurfaceMap", "TopographySource", "bem_normal_law",
+    "fit_exponential", "read_surface",
 ]

@@ -2,10 +2,16 @@
 
 Keys of ``[halfspace]``:
   profile            sphere | cylinder | flat_punch | power_law | rough_exponential | tabulated
+                     | topography
   radius             sphere/cylinder radius, punch radius (m)
   coefficient, exponent   power law z = c rⁿ (c in m^(1−n))
   gamma_sigma        γσ of the rough law dP/dU = P/(γσ) (m)
-  table_U, table_P   tabulated P(U) pairs (m, N), convex, starting at P = 0
+  table_U, table_P   tabulated P(U) pairs (m, N), convex, starting at P = 0; or
+  table_file         CSV (header with columns U, P) or netCDF (variables U, P) of them
+  topography_file    profile = "topography": a height map (any SurfaceTopography format)
+                     pressed by a BEM into P(U) (:mod:`~slipcycle.halfspace.topography`),
+                     with nominal_area (m²), fit ("table" | "exponential"), bem_grid,
+                     bem_loads, fit_tolerance, short_cutoff, long_cutoff (m)
   reference_depth    cylinder: depth of the displacement reference point (m, default radius)
   E, nu              Young's moduli (Pa) and Poisson's ratios of both bodies, or
   contact_modulus    E* (Pa) directly
@@ -37,12 +43,19 @@ from slipcycle.halfspace.profiles import (
     Tabulated,
     sphere,
 )
+from slipcycle.halfspace.topography import (
+    TopographySource,
+    read_source,
+    read_table_file,
+    topography_profile,
+)
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.loading import TabulatedLoad
 
 __all__ = ["parse_case", "run_case", "solve_case", "solve_model"]
 
-PROFILES = ("sphere", "cylinder", "flat_punch", "power_law", "rough_exponential", "tabulated")
+PROFILES = ("sphere", "cylinder", "flat_punch", "power_law", "rough_exponential", "tabulated",
+            "topography")
 
 
 def _elasticity(sec: Section, plane: bool) -> ContactElasticity:
@@ -80,18 +93,31 @@ def _profile(sec: Section):
                 sec.array("E", None, shape=(2,), gt=0.0)
                 ratio = float(np.mean((2 - nu) / (2 * (1 - nu))))
         else:
-            U = sec.array("table_U", shape=(None,))
-            P = sec.array("table_P", shape=(None,), ge=0.0)
+            if sec.has("table_file"):   # columns U [m], P [N] (CSV or netCDF)
+                if sec.has("table_U") or sec.has("table_P"):
+                    raise sec.error("table_file", "give either table_file or table_U and "
+                                    "table_P, not both")
+                ukey = pkey = "table_file"
+                try:
+                    U, P = read_table_file(sec.path("table_file"))
+                except InputError as exc:
+                    raise sec.error("table_file", exc.problem) from None
+            else:
+                ukey, pkey = "table_U", "table_P"
+                U = sec.array("table_U", shape=(None,))
+                P = sec.array("table_P", shape=(None,), ge=0.0)
+            if np.any(P < 0):
+                raise sec.error(pkey, "loads P must be >= 0")
             if U.size < 2 or U.size != P.size:
-                raise sec.error("table_P", f"needs as many values as table_U (>= 2), got "
+                raise sec.error(pkey, f"needs as many values as table_U (>= 2), got "
                                 f"{P.size} and {U.size}")
             if np.any(np.diff(U) <= 0):
-                raise sec.error("table_U", "must increase strictly")
+                raise sec.error(ukey, "must increase strictly")
             if P[0] != 0.0:
-                raise sec.error("table_P", "must start at 0 (first touch)")
+                raise sec.error(pkey, "must start at 0 (first touch)")
             slopes = np.diff(P) / np.diff(U)
             if np.any(slopes <= 0) or np.any(np.diff(slopes) < -1e-12 * slopes.max()):
-                raise sec.error("table_P", "P(U) must increase with non-decreasing slope "
+                raise sec.error(pkey, "P(U) must increase with non-decreasing slope "
                                 "(a convex normal law; otherwise no slider bed exists)")
             prof = Tabulated(U, P)
             if ratio is None:
@@ -99,6 +125,8 @@ def _profile(sec: Section):
         return prof, None, ratio
     plane = name == "cylinder"
     el = _elasticity(sec, plane)
+    if name == "topography":   # BEM law of a measured surface, computed by parse_case
+        return read_source(sec, el.contact_modulus), el, el.compliance_ratio
     if name == "sphere":
         prof = sphere(sec.float("radius", gt=0.0), el.contact_modulus)
     elif name == "cylinder":
@@ -173,7 +201,10 @@ PROFILE_KEYS = {
     "flat_punch": {"radius", "E", "nu", "contact_modulus", "compliance_ratio"},
     "power_law": {"coefficient", "exponent", "E", "nu", "contact_modulus", "compliance_ratio"},
     "rough_exponential": {"gamma_sigma", "compliance_ratio", "nu", "E"},
-    "tabulated": {"table_U", "table_P", "compliance_ratio"},
+    "tabulated": {"table_U", "table_P", "table_file", "compliance_ratio"},
+    "topography": {"topography_file", "nominal_area", "fit", "bem_grid", "bem_loads",
+                   "fit_tolerance", "short_cutoff", "long_cutoff", "E", "nu",
+                   "contact_modulus", "compliance_ratio"},
 }
 
 _DEFAULT_SLIDERS = 2000
@@ -214,12 +245,21 @@ def parse_case(case: Case) -> HalfspaceModel:
         steady_tol=run.float("steady_tol", 1e-9),
         profile_name=name,
     )
+    if isinstance(profile, TopographySource):   # the BEM runs once every key is valid
+        for table in ("map", "roughness"):   # tables that other commands read
+            if table in case.data:
+                case.section(table).ignore()
+        case.finish()
+        settings.update(profile_name="", profile=topography_profile(
+            sec, profile, normal, ncontrol, protocol, steps, settings["n_sliders"]))
     try:
         model = HalfspaceModel(**settings)
     except InputError as exc:
         raise CaseError(_MODEL_KEYS.get(exc.key, exc.key), exc.problem) from None
     if "map" in case.data:   # a run case may carry its Ŵ map (slipcycle map reads it)
         case.section("map").ignore()
+    if "roughness" in case.data:   # ... and its roughness study (slipcycle roughness)
+        case.section("roughness").ignore()
     case.finish()
     check_memory(model)
     try:
