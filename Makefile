@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-$(shell sha1sum pyproject.toml | cut -c1-12)
 
-.PHONY: demo test bench lint clean
+.PHONY: demo test bench lint clean dist typecheck docs
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -25,5 +25,19 @@ bench: $(STAMP)
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks
 
+dist: $(STAMP)
+	rm -rf dist
+	$(PY) -m build --outdir dist .
+	$(PY) -m twine check --strict dist/*
+
+typecheck: $(STAMP)
+	$(PY) -m mypy
+
+# the site and its executed gallery (examples/gallery) in docs/_build/html; warnings fail
+docs: $(STAMP)
+	MPLBACKEND=Agg $(PY) -m sphinx -b html -W --keep-going -q docs docs/_build/html
+	@echo "Docs: docs/_build/html/index.html"
+
 clean:
 	rm -rf $(VENV) demo-report .pytest_cache .hypothesis
+	rm -rf docs/_build docs/auto_examples docs/api/generated docs/sg_execution_times.rst

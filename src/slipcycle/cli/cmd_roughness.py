@@ -8,7 +8,7 @@ study computes the BEM normal law P(U) and its exponential fit (γσ and the loa
 it holds), the dissipation per cycle of the rough joint and its phase dependence, its
 convergence in BEM grid and slider count, the cut-off wavelengths that change dissipation and
 stiffness by the tolerance (5 %), and the local fretting map of a flat punch of the nominal
-area (Barber 2011, §4.6). Needs the ``topo`` extra (``pip install 'slipcycle[topo]'``).
+area (Barber 2012, §4.6). Needs the ``topo`` extra (``pip install 'slipcycle[topo]'``).
 BEM laws are cached (``$SLIPCYCLE_CACHE``, default ``~/.cache/slipcycle/bem``).
 """
 

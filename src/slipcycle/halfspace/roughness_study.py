@@ -1,6 +1,6 @@
 """Rough interfaces from topography: which wavelengths matter (``slipcycle roughness``).
 
-Barber (2011, §4.6) argues that every engineering contact is incomplete because of
+Barber (2012, §4.6) argues that every engineering contact is incomplete because of
 roughness, that the incremental normal stiffness of a rough interface is roughly
 proportional to the load (dP/dU = P/(γσ)), that the dissipation per unit area can be
 estimated by applying the rough-surface result locally to the nominal traction cycle of the
@@ -224,7 +224,7 @@ def local_dissipation(profile, normal: HarmonicLoad, tangential: HarmonicLoad,
 
     Point i carries the nominal tractions p_i(θ) = c_i P(θ), q_i(θ) = c_i Q(θ) (the stuck
     flat punch, or any smooth solution with proportional tractions); each point is a small
-    rough contact of unit nominal area under its own cycle (Barber 2011, §4.6), solved by
+    rough contact of unit nominal area under its own cycle (Barber 2012, §4.6), solved by
     the slider bed of its normal law.
 
     Parameters
@@ -417,7 +417,7 @@ _UNITS = {"pressure": "Pa", "approach": "m", "contact_fraction": "1", "gamma_sig
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
 class RoughnessResult(StudyResult):
     """Rough interface from topography: normal law, dissipation and the wavelengths that
-    matter (``slipcycle roughness``; Barber 2011, §4.6).
+    matter (``slipcycle roughness``; Barber 2012, §4.6).
 
     Attributes
     ----------

@@ -13,7 +13,7 @@ so that the normal law of a joint of nominal area A is P(U) = A p̄(U): the inte
 half-space leaves out (Persson 2007; Pastewka & Robbins 2014). Reading goes through
 ``SurfaceTopography`` (instrument formats, units converted to metres).
 
-Where the exponential law of Barber 2011 (§4.6, eq. 10; Akarapu et al. 2011),
+Where the exponential law of Barber 2012 (§4.6, eq. 10; Akarapu et al. 2011),
 dP/dU = P/(γσ), applies is decided from the BEM data: the local γσ(P) = dU/d ln P must stay
 within a tolerance (default 10 %) of the least-squares γσ of the widest load window
 (:func:`fit_exponential`). The law is fed to the slider bed either as that exponential or
@@ -471,7 +471,7 @@ class ExponentialFit:
 
 
 def fit_exponential(P: np.ndarray, U: np.ndarray, tolerance: float = 0.1) -> ExponentialFit:
-    """Fit P = P_ref exp(U/γσ) where it applies (Barber 2011, eq. 10).
+    """Fit P = P_ref exp(U/γσ) where it applies (Barber 2012, eq. 10).
 
     The local γσ(P) = dU/d ln P is computed at every point (second-order differences in
     ln P); the fit window is the contiguous run of points that is widest in ln P among
