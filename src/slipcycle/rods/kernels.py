@@ -15,9 +15,9 @@ step, or the wave impedance). With y = δ_new − δ_old this is
 a force-controlled step of the bed with one extra linear element of stiffness 1/C, which the
 Jenkins-bed kernel :func:`slipcycle.kernels.jenkins.solve_tangential_force` (shared with
 the half-space slider bed) solves exactly; :func:`slipcycle.kernels.jenkins.apply_increment`
-then moves the elements (the same return map as the slider bed's). Rigid-plastic interfaces (``coulomb``, and
-``welded`` with infinite capacity) are the closed-form limit κ → ∞: T_new = clip(δ_pred −
-δ_old)/C, ±c).
+then moves the elements (the same return map as the slider bed's). Rigid-plastic interfaces
+(``coulomb``, and ``welded`` with infinite capacity) are the closed-form limit κ → ∞:
+T_new = clip((δ_pred − δ_old)/C, ±c).
 """
 
 from __future__ import annotations

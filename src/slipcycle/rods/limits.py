@@ -11,7 +11,13 @@ position L1/(L1 + L2) (total length and everything else fixed; each geometry use
 Every point is computed exactly as ``slipcycle run`` computes its one point (same interface
 bed from :func:`slipcycle.rods.case.interface_bed`, same steps, cycle limit and tolerance),
 so a number read off the limit curve equals the one ``slipcycle run`` reports at that
-frequency.
+frequency. Each point's steady state is :func:`slipcycle.rods.modal.steady_state`: cycling
+from the stuck linear steady state with a periodic projection (per frequency, one
+:class:`~slipcycle.rods.modal.Propagator` serves every amplitude: step coefficients and the
+Fourier form of the scheme's periodic response), and, where cycling would still need many
+cycles, semismooth Newton on the periodic problem (:mod:`slipcycle.rods.periodic`), whose
+solution one ordinary cycle must verify. A point that reaches no verified periodic state
+within the cycle limit is flagged ``converged = False``.
 
 Undamped resonance. With ζ = 0 and a welded interface the system is linear and lossless:
 at a natural frequency of the welded system (both outer ends fixed) the steady response is

@@ -41,11 +41,16 @@ each cycle's modal end state z_K = A^K z_0 + P (P: forced response to that cycle
 history) is projected onto the periodic orbit for that history, z_0* = (I − A^K)⁻¹ P
 (per mode, exact); this removes the slowly decaying free vibration of lightly damped modes
 and typically converges in a few cycles. If the projected iteration stops contracting, the
-solver falls back to plain (physical) cycling.
+solver falls back to plain (physical) cycling. Where cycling at its observed rate would
+still need many cycles (lightly damped modes near Ω, resonance, gross slip), the periodic
+problem of the same discrete scheme is solved by semismooth Newton on the cycle's relative
+rotation (:mod:`slipcycle.rods.periodic`) from the state cycling has reached, and one
+ordinary cycle verifies the solution with the same steadiness test.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -54,6 +59,7 @@ import numpy as np
 from slipcycle.rods.interfaces import Bed
 from slipcycle.rods.kernels import integrate
 from slipcycle.rods.model import Excitation, TwoRods
+from slipcycle.rods.periodic import newton_periodic, periodic_operator, single_threaded_blas
 from slipcycle.rods.welded import normal_force_history
 
 __all__ = ["ModalBasis", "Propagator", "modal_basis", "modal_frf", "step_coefficients",
@@ -367,6 +373,35 @@ class Propagator:
                 self.cache[k] = None
         return self.cache[k]
 
+    def projector(self, k: float):
+        """(k_used, e ↦ (I − S(k)^K)⁻¹ e), k rounded as in :meth:`monodromy_lu`; None if
+        unavailable. Uses the periodic operator (O(K m) per solve, the same result as the
+        dense monodromy to rounding) and the dense monodromy only where that does not
+        exist (an undamped mode on a harmonic of the drive)."""
+        if not self.accelerate:
+            return None
+        if math.isfinite(k) and k > 0:
+            k = float(np.exp(np.round(np.log(k) * 8.0) / 8.0))
+        elif not math.isfinite(k) and not self.basis.R > 0.0:
+            return None
+        op = self.periodic()
+        if op is not None:
+            return k, functools.partial(op.project, k)
+        got = self.monodromy_lu(k)
+        if got is None:
+            return None
+        return got[0], functools.partial(_lu_solve, got[1])
+
+    def periodic(self):
+        """The scheme's periodic response operator (:func:`slipcycle.rods.periodic.
+        periodic_operator`), built once per propagator; None where it does not exist."""
+        if "periodic" not in self.cache:
+            # (m, K) complex transfer arrays: bounded so that fine steps stay in memory
+            small = self.basis.size * self.K <= PERIODIC_MAX_SIZE
+            self.cache["periodic"] = (periodic_operator(self.basis, self.coef, self.K)
+                                      if small else None)
+        return self.cache["periodic"]
+
 
 def _lu(A):
     from scipy.linalg import lu_factor
@@ -454,17 +489,41 @@ def _run(basis, coef, h, th, thd, thdd, N, bed, q, v, t_el, state, d):
     return T_out, d_out, acc
 
 
+#: cycles run before the first Newton solve of the periodic problem (``method="newton"``)
+NEWTON_AFTER = 20
+#: Newton solves allowed per run (each followed by a verifying cycle)
+NEWTON_ATTEMPTS = 2
+#: largest K for Newton (a dense K × K factorisation per iteration)
+NEWTON_MAX_STEPS = 2000
+#: largest modes × K for the Fourier form of the periodic response (8 complex (m, K) arrays)
+PERIODIC_MAX_SIZE = 400_000
+#: cycles without halving the residual after which the projection is given up
+STALL_CYCLES = 4
+#: Newton is tried when cycling at its observed rate still needs more than
+#: NEWTON_WORTH/(modes + bed elements) cycles: a cycle costs about K (m + n), a Newton
+#: iteration about one dense K × K factorisation, and Newton usually takes 1–8 of them
+NEWTON_WORTH = 6000.0
+
+
 def steady_state(rods: TwoRods, exc: Excitation, bed: Bed, basis: ModalBasis,
                  steps_per_cycle: int = 400, max_cycles: int = 200, tol: float = 1e-6,
                  accelerate: bool = True, N_history: np.ndarray | None = None,
-                 propagator: Propagator | None = None) -> DynamicResult:
+                 propagator: Propagator | None = None, method: str = "newton"
+                 ) -> DynamicResult:
     """Periodic steady state of the modal model under Θ_a sin Ωt (see module docstring).
 
     Each step advances every modal oscillator exactly for forcing linear over the step
     (Nigam & Jennings 1969) and solves the interface bed exactly for the implicit
     end-of-step torque; cycles are repeated, with the periodic projection of the modal
     state (``accelerate``), until the torque history, the modal state and the element
-    torques repeat to ``tol``.
+    torques repeat to ``tol``. With ``method="newton"`` (default) the periodic problem of
+    the same discrete scheme is solved by semismooth Newton on the cycle's relative
+    rotation (:mod:`slipcycle.rods.periodic`) after :data:`NEWTON_AFTER` cycles, from the
+    state those cycles reached; the next ordinary cycle verifies the solution with the same
+    steadiness test, and cycling simply continues where Newton fails. Both methods return
+    the same steady state (the dissipation to rounding; the peak torque to the history
+    dependence of elements that slip only in the transient, docs/rods.md;
+    tests/test_rods_periodic.py); ``"cycling"`` only cycles.
 
     Parameters
     ----------
@@ -491,6 +550,9 @@ def steady_state(rods: TwoRods, exc: Excitation, bed: Bed, basis: ModalBasis,
         Normal force over the cycle; default: exact closed-contact axial response.
     propagator : Propagator, optional
         Precomputed step coefficients and monodromy (reused across amplitudes in maps).
+    method : {"newton", "cycling"}
+        Newton on the periodic problem after a few cycles, verified by a cycle, or
+        cycling alone.
 
     Returns
     -------
@@ -505,6 +567,15 @@ def steady_state(rods: TwoRods, exc: Excitation, bed: Bed, basis: ModalBasis,
     Nigam, N. C. & Jennings, P. C. (1969). Calculation of response spectra from
     strong-motion earthquake records. Bull. Seismol. Soc. Am. 59, 909–922.
     """
+    if method not in ("newton", "cycling"):
+        raise ValueError(f"method: must be 'newton' or 'cycling', got {method!r}")
+    with single_threaded_blas():
+        return _steady_state(rods, exc, bed, basis, steps_per_cycle, max_cycles, tol,
+                             accelerate, N_history, propagator, method == "newton")
+
+
+def _steady_state(rods, exc, bed, basis, steps_per_cycle, max_cycles, tol, accelerate,
+                  N_history, propagator, newton):
     K = int(steps_per_cycle)
     h = exc.period / K
     tt = np.arange(K + 1) * h
@@ -539,6 +610,9 @@ def steady_state(rods: TwoRods, exc: Excitation, bed: Bed, basis: ModalBasis,
     converged = False
     residual = math.inf
     cyc = 0
+    newton = newton and not bed.rigid and bed.size > 0
+    attempts = 0
+    next_newton = NEWTON_AFTER
     for cyc in range(1, max_cycles + 1):  # noqa: B007 (cyc is reported)
         z0q, z0v = q.copy(), v.copy()
         t0_el = t_el.copy()
@@ -558,20 +632,30 @@ def steady_state(rods: TwoRods, exc: Excitation, bed: Bed, basis: ModalBasis,
         if accelerate:
             stalls = 0 if residual < 0.5 * best else stalls + 1
             best = min(best, residual)
-            if stalls >= 4:
+        if (newton and attempts < NEWTON_ATTEMPTS and cyc >= next_newton and cyc < max_cycles
+                and _cycles_to_go(res_hist, tol) * (m + bed.size) > NEWTON_WORTH):
+            attempts += 1
+            next_newton = 2 * cyc + 1  # a later attempt starts closer to the orbit
+            T_new = _newton_jump(propagator, bed, th, thdd, Nc, d_out, q, v, t_el, state)
+            if T_new is not None:
+                T_prev = T_new  # the next cycle verifies the periodic solution
+                continue
+        if accelerate:
+            if stalls >= STALL_CYCLES:
                 accelerate = False  # projected iteration not contracting: plain cycling
                 continue
             # linearise the interface by the secant stiffness of this cycle's loop
             span = float(np.ptp(d_out))
             k_lin = k0 if span <= 0.0 else min(float(np.ptp(T_out)) / span, k0)
-            got = propagator.monodromy_lu(k_lin)
+            got = propagator.projector(k_lin)
             if got is None:
                 accelerate = False
                 continue
-            k_used, lu = got
+            k_used, solve = got
             zK = np.concatenate([q, v])
             z0 = np.concatenate([z0q, z0v])
-            dz = z0 + _lu_solve(lu, zK - z0) - zK
+            with np.errstate(all="ignore"):
+                dz = z0 + solve(zK - z0) - zK
             if not np.all(np.isfinite(dz)):  # singular monodromy (undamped resonance)
                 accelerate = False
                 continue
@@ -581,6 +665,42 @@ def steady_state(rods: TwoRods, exc: Excitation, bed: Bed, basis: ModalBasis,
         D = 0.0  # rounding noise of a stuck cycle
     return DynamicResult(tt, th, T_out, d_out, N, D, float(acc[0]),
                          float(acc[1]), cyc, converged, residual, d - d_start)
+
+
+def _cycles_to_go(res_hist, tol):
+    """Cycles still needed at the contraction rate of the last three cycles (inf: none)."""
+    if len(res_hist) < 4 or not res_hist[-1] > tol:
+        return 0.0 if res_hist and res_hist[-1] <= tol else math.inf
+    rate = (res_hist[-1] / res_hist[-4]) ** (1.0 / 3.0) if res_hist[-4] > 0 else 0.0
+    if not rate < 1.0:
+        return math.inf
+    if rate <= 0.0:
+        return 0.0
+    return math.log(tol / res_hist[-1]) / math.log(rate)
+
+
+def _newton_jump(propagator, bed, th, thdd, Nc, d_out, q, v, t_el, state):
+    """Replace the run's state by the Newton solution of the periodic problem.
+
+    Starts from the last cycle's δ and keeps the current element state (the offsets of
+    elements that never slip). On success sets q, v, t_el, state in place to step 0 of the
+    periodic orbit and returns its torque history (K + 1,); None (state untouched) if the
+    operator does not exist or Newton fails.
+    """
+    K = th.size - 1
+    op = propagator.periodic() if K <= NEWTON_MAX_STEPS else None
+    if op is None:
+        return None
+    delta0 = np.concatenate([d_out[K:], d_out[1:K]])  # the latest value at every step
+    kappa, capu = _bed_arrays(bed)
+    res = newton_periodic(op, op.drive(th[:K], thdd[:K]), kappa, capu, Nc[:K], delta0,
+                          t_el, float(state[1]))
+    if not res.converged:
+        return None
+    q[:], v[:] = op.modal_state(res.T, thdd[:K])
+    t_el[:] = res.t_el
+    state[:] = (float(np.sum(res.t_el)), float(res.delta[0]), 0.0)
+    return np.append(res.T, res.T[0])
 
 
 def transient(rods: TwoRods, bed: Bed, basis: ModalBasis, t: np.ndarray, theta: np.ndarray,
