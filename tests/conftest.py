@@ -40,7 +40,7 @@ def write_case(tmp_path):
     return _write
 
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 def _toml_value(value) -> str:

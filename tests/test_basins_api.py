@@ -11,7 +11,7 @@ from slipcycle.discrete.basins import basins_study, parse_range, read_protocols
 from slipcycle.discrete.steady import STEADY_CODES
 from slipcycle.io import CaseError, read_case
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 @pytest.fixture(scope="module")

@@ -24,7 +24,7 @@ from conftest import case_text
 from slipcycle.cli.main import main
 from slipcycle.io.results import remove_stale_partials
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 CLI = [sys.executable, "-m", "slipcycle.cli.main"]
 
 SPHERE = case_text("halfspace_sphere", loading={"P1": 20.0, "Q0": None, "phase": 1.0},

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 BASE = """
 model = "discrete"

@@ -13,7 +13,7 @@ from slipcycle.discrete.case import read_discrete_case, run_case
 from slipcycle.discrete.shakedown import lambda1, lambda2, safe_region
 from slipcycle.io import parse_case_text, read_case
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 def _dc(name):

@@ -23,7 +23,7 @@ from slipcycle.discrete.shakedown import lambda1, lambda2, safe_region
 from slipcycle.discrete.steady import simulate
 from slipcycle.io import CaseError, parse_case_text, read_case
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 TRIANGLE = EXAMPLES / "shakedown_triangle.toml"
 
 TWO_NODE = """model = "discrete"

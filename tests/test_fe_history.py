@@ -30,7 +30,7 @@ from slipcycle.fe.builders import block_on_rigid
 from slipcycle.fe.loads import combined_loads
 from slipcycle.fe.reduction import reduce_problem
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 STEPS = 50
 
 

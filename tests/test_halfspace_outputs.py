@@ -77,7 +77,8 @@ def test_proportional_ramp_below_f_gives_q_equal_Q_over_P_times_p_at_any_step_co
     assert np.all(res.first_slip == bed.size)        # nothing slips, ever
 
 
-GROSS = open("examples/halfspace_sphere.toml").read().replace("Q1 = 30.0", "Q1 = 80.0")
+GROSS = open("src/slipcycle/examples/halfspace_sphere.toml").read().replace("Q1 = 30.0",
+                                                                        "Q1 = 80.0")
 
 
 def test_gross_slip_in_assembly_is_a_result_through_slipcycle_run(run_cli, write_case,
@@ -159,7 +160,7 @@ def test_map_result_has_units_and_long_names_everywhere(run_cli, write_case, tmp
             assert k in s["units"], k
 
 
-SPHERE = open("examples/halfspace_sphere.toml").read()
+SPHERE = open("src/slipcycle/examples/halfspace_sphere.toml").read()
 
 
 @pytest.mark.parametrize("cmd,text,key,memory", [
@@ -196,7 +197,7 @@ BLAME = [
      "halfspace.E: not used"),
     ("run", MAP, "slipcycle map"),
     ("map", SPHERE, "slipcycle run"),
-    ("map", open("examples/discrete_two_node.toml").read(), "slipcycle run"),
+    ("map", open("src/slipcycle/examples/discrete_two_node.toml").read(), "slipcycle run"),
 ]
 
 

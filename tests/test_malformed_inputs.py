@@ -23,7 +23,7 @@ import pytest
 
 from slipcycle.cli.main import main
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from slipcycle.fe.model import discrete_case_text
 from slipcycle.fe.reduction import reduce_problem
 from slipcycle.loading import HarmonicLoad
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ from conftest import case_text
 
 from slipcycle.io import parse_case_text
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"  # the Python example scripts
 
 
 def run_example(name: str, tmp_path: Path) -> dict:

@@ -25,7 +25,7 @@ from slipcycle.halfspace.case import parse_case
 from slipcycle.halfspace.model import HalfspaceModel, LoadPathError
 from slipcycle.io import CaseError, parse_case_text
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 SPHERE = (EXAMPLES / "halfspace_sphere.toml").read_text(encoding="utf-8")
 TWO_NODE = (EXAMPLES / "discrete_two_node.toml").read_text(encoding="utf-8")
 

@@ -10,6 +10,7 @@ import pytest
 from conftest import case_text
 
 ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "src" / "slipcycle" / "examples"
 
 def _base(interface: str, modes: int, amp: float) -> str:
     """The specification's rods case with the interface, modes and amplitude set."""
@@ -20,7 +21,7 @@ def _base(interface: str, modes: int, amp: float) -> str:
 
 def test_spec_example_runs_as_written(run_cli, tmp_path):
     case = tmp_path / "rods.toml"
-    shutil.copy(ROOT / "examples" / "rods_spec.toml", case)
+    shutil.copy(EXAMPLES / "rods_spec.toml", case)
     code, out, err = run_cli("run", case, "--out", tmp_path / "out", "--quiet")
     assert code == 0, err
     s = json.loads((tmp_path / "out" / "summary.json").read_text())

@@ -32,6 +32,7 @@ from slipcycle.rods.interfaces import (
 )
 
 ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "src" / "slipcycle" / "examples"
 
 CASE = """
 model = "rods"
@@ -230,7 +231,7 @@ def test_limits_table_refused_with_key(run_cli, write_case, tmp_path, limits, ke
 
 def test_limits_on_another_model_names_the_commands_that_serve_it(run_cli, tmp_path):
     case = tmp_path / "hs.toml"
-    case.write_text((ROOT / "examples" / "halfspace_sphere.toml").read_text())
+    case.write_text((EXAMPLES / "halfspace_sphere.toml").read_text())
     code, out, err = run_cli("limits", case, "--out", tmp_path / "l")
     assert code == 2
     assert err.startswith("error: model:") and "unknown" not in err
@@ -372,7 +373,7 @@ def test_limits_equal_example_header_inception_and_omega1():
     from slipcycle.rods.case import parse_case
     from slipcycle.rods.quasistatic import slip_inception_torque_qs
 
-    rc = parse_case(read_case(ROOT / "examples" / "rods_limits_equal.toml"))
+    rc = parse_case(read_case(EXAMPLES / "rods_limits_equal.toml"))
     C = rc.rods.rods_compliance + 1 / rc.rods.interface_torsional_stiffness
     theta_s = slip_inception_torque_qs(rc.rods, rc.exc.axial_force) * C
     assert round(theta_s, 4) == 0.0125 and rc.exc.rotation_amplitude > theta_s
@@ -390,7 +391,7 @@ def test_limits_examples_quoted_numbers(example, w1, torque, dissipation):
     from slipcycle.io import read_case
     from slipcycle.rods.limits import limit_frequency, make_study, parse_limits
 
-    lc = parse_limits(read_case(ROOT / "examples" / example), 0.05, maps=False)
+    lc = parse_limits(read_case(EXAMPLES / example), 0.05, maps=False)
     study, _ = make_study(lc.rc)
     cut = lc.ratios[: int(np.searchsorted(lc.ratios, 1.2 * torque)) + 1]
     lim = limit_frequency(study, 0.05, cut)
@@ -406,7 +407,7 @@ def test_spec_example_regularisation_numbers_quoted_in_docs():
     from slipcycle.io import read_case
     from slipcycle.rods.case import run_case
 
-    reg = run_case(read_case(ROOT / "examples" / "rods_spec.toml")).summary["regularisation"]
+    reg = run_case(read_case(EXAMPLES / "rods_spec.toml")).summary["regularisation"]
     assert round(reg["distributed"]["slope_microslip"]) == 26
     assert round(reg["iwan_fit"]["chi"], 2) == 0.67
     assert round(reg["iwan"]["slope_microslip"], 1) == 4.0

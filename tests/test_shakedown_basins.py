@@ -26,7 +26,7 @@ from slipcycle.discrete.shakedown import (
 )
 from slipcycle.io import read_case
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 RUN = {"cycles": 80, "steps_per_cycle": 60, "tol": 1e-8}
 
 

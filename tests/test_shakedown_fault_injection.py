@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 CASE = EXAMPLES / "shakedown_triangle.toml"
 # a small scan: 5 λ values × 3 starts, bisection to 5 % of lam_max
 ARGS = ["--lam-points", "5", "--starts", "2", "--lam-tol", "0.05", "--workers", "1",

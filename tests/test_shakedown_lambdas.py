@@ -21,7 +21,7 @@ from slipcycle.discrete.shakedown import (
 from slipcycle.io import read_case
 from slipcycle.loading import TabulatedLoad
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 def triangle_case():
@@ -319,7 +319,7 @@ def test_round_off_slip_does_not_erase_memory():
     from slipcycle.discrete.steady import simulate
     from slipcycle.io import read_case
 
-    dc = read_discrete_case(read_case(Path(__file__).resolve().parents[1] / "examples"
+    dc = read_discrete_case(read_case(EXAMPLES
                                       / "shakedown_triangle.toml"))
     load = dc.load.with_lam(1.345)
     V = sample_initial_slips(dc.system, load, 8, seed=0)

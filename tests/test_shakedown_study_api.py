@@ -13,7 +13,7 @@ from slipcycle.discrete.shakedown_study import SUMMARY_UNITS, shakedown_study
 from slipcycle.discrete.steady import STEADY_CODES
 from slipcycle.io import CaseError, read_case
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 @pytest.fixture(scope="module")

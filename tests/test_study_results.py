@@ -17,7 +17,7 @@ from conftest import case_text
 from slipcycle.io.results import to_jsonable
 from slipcycle.result import StudyResult
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 MAP_CASE = """
 model = "halfspace"

@@ -22,7 +22,7 @@ pytest.importorskip("zarr")
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
                                 reason="process bookkeeping through /proc")
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 def small_case(steps: int = 60) -> str:

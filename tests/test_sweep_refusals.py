@@ -14,7 +14,7 @@ import pytest
 
 from slipcycle.sweep import core
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 
 
 def small_case() -> str:

@@ -15,7 +15,7 @@ from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.case import apply_overrides, make_task, parse_set
 from slipcycle.sweep.core import TaskRunner, parse_values, worker_threads
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 CASE = EXAMPLES / "shakedown_triangle.toml"
 
 

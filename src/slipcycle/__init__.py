@@ -14,28 +14,39 @@ Subpackages, one per capability:
 - :mod:`slipcycle.api`       :func:`run`: any case (path, TOML text, dict, model) -> result
 - :mod:`slipcycle.result`    the result contract shared by every model (:class:`RunResult`)
 - :mod:`slipcycle.plot`      figures
+- :mod:`slipcycle.examples`  the example case files shipped with the package
 - :mod:`slipcycle.cli`       the ``slipcycle`` command
+
+``import slipcycle`` is cheap: :func:`run`, the result types and the example helpers load
+on first use, so the command line starts without NumPy until a command needs it.
 """
+
+from typing import TYPE_CHECKING
 
 from slipcycle._version import __version__
 
-__all__ = ["__version__", "run", "RunResult", "SteadyState"]
+if TYPE_CHECKING:  # pragma: no cover - for type checkers; loaded lazily at run time
+    from slipcycle.api import run
+    from slipcycle.examples import example_path, list_examples
+    from slipcycle.result import RunResult, SteadyState, StudyResult
+
+__all__ = ["__version__", "run", "RunResult", "StudyResult", "SteadyState", "example_path",
+           "list_examples"]
 
 #: public names loaded on first use, so that ``import slipcycle`` stays cheap
 _LAZY = {"run": "slipcycle.api", "RunResult": "slipcycle.result",
-         "SteadyState": "slipcycle.result"}
+         "StudyResult": "slipcycle.result", "SteadyState": "slipcycle.result",
+         "example_path": "slipcycle.examples", "list_examples": "slipcycle.examples"}
 
 
 def __getattr__(name: str):
-    """``slipcycle.run``, ``slipcycle.RunResult``, ``slipcycle.SteadyState`` on first use."""
-    if name == "run":
-        from slipcycle.api import run
+    """The names of :data:`_LAZY` (``slipcycle.run``, ...) on first use."""
+    if name in _LAZY:
+        import importlib
 
-        return run
-    if name in ("RunResult", "SteadyState"):
-        from slipcycle import result
-
-        return getattr(result, name)
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
     raise AttributeError(f"module 'slipcycle' has no attribute {name!r}")
 
 

@@ -14,11 +14,13 @@ module imports no model package and sits below ``sweep``.
 from __future__ import annotations
 
 import copy
+import inspect
 import json
 import math
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from slipcycle import registry
@@ -33,7 +35,8 @@ _KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(\[(\d+)\])?$")
 _BARE = re.compile(r"^[A-Za-z0-9_-]+$")
 
 
-def run(case: Any, overrides: Mapping[str, Any] | None = None) -> RunResult:
+def run(case: Any, overrides: Mapping[str, Any] | None = None, *,
+        progress: Callable[[float, float], None] | None = None) -> RunResult:
     """Validate and solve ``case`` with its model; return the model's result object.
 
     Parameters
@@ -54,6 +57,10 @@ def run(case: Any, overrides: Mapping[str, Any] | None = None) -> RunResult:
     overrides : mapping, optional
         Dotted case keys -> new values, applied before validation (``{"loading.lam":
         1.2, "loading.p1[0]": 0.3}``); for case files, TOML text, dicts and Cases only.
+    progress : callable, optional
+        ``progress(done, total)``, called by a solver that reports its progress (one
+        whose entry point takes a ``progress`` keyword); solvers without such a hook
+        ignore it (the command line then shows only the elapsed time).
 
     Returns
     -------
@@ -78,10 +85,26 @@ def run(case: Any, overrides: Mapping[str, Any] | None = None) -> RunResult:
         if overrides:
             raise TypeError("overrides apply to case files, TOML text and dicts; build the "
                             "model object with the values wanted instead")
-        solve = registry.resolve(found[1].model_solver)
-        return solve(*case) if isinstance(case, tuple) else solve(case)
+        target = found[1].model_solver
+        if target is None:  # entry_for_object finds entries with a model_solver only
+            raise TypeError(f"model {found[0]!r} solves no model objects")
+        solve = registry.resolve(target)
+        extra = _progress_keyword(solve, progress)
+        return solve(*case, **extra) if isinstance(case, tuple) else solve(case, **extra)
     c = as_case(case, overrides)
-    return registry.solver(c.model)(c)
+    solve = registry.solver(c.model)
+    return solve(c, **_progress_keyword(solve, progress))
+
+
+def _progress_keyword(solve: Callable[..., Any], progress) -> dict:
+    """``{"progress": progress}`` if ``solve`` takes a ``progress`` keyword, else ``{}``."""
+    if progress is None:
+        return {}
+    try:
+        params = inspect.signature(solve).parameters
+    except (TypeError, ValueError):
+        return {}
+    return {"progress": progress} if "progress" in params else {}
 
 
 def as_case(case: Any, overrides: Mapping[str, Any] | None = None) -> Case:
@@ -109,7 +132,7 @@ def as_case(case: Any, overrides: Mapping[str, Any] | None = None) -> Case:
             parse_case_text(f"model = {json.dumps(case.model)}\n", None, models)
         base = case
     elif isinstance(case, os.PathLike):
-        base = read_case(case, models)
+        base = read_case(Path(os.fspath(case)), models)
     elif isinstance(case, str):
         base = parse_case_text(case, None, models) if ("\n" in case or "=" in case) \
             else read_case(case, models)

@@ -1,4 +1,4 @@
-"""The demonstration report of ``slipcycle demo``: the embedded example cases, each run by
+"""The demonstration report of ``slipcycle demo``: shipped example cases, each run by
 its model, and a small rough-surface dissipation map Ŵ(φ) (Barber, *Frictional systems
 under periodic loads*, Fig. 7) with the cubic law at small amplitude.
 """
@@ -6,109 +6,39 @@ under periodic loads*, Fig. 7) with the cubic law at small amplitude.
 from __future__ import annotations
 
 import json
+import logging
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from slipcycle._version import __version__
 from slipcycle.api import run
+from slipcycle.examples import example_text
 
-__all__ = ["DEMO_CASES", "write_report"]
+__all__ = ["DEMO_CASES", "DEMO_FILES", "write_report"]
 
-#: case name -> (title, TOML text) of the embedded examples
-DEMO_CASES = {
-    "mindlin_sphere": ("Hertzian sphere, constant P, oscillating Q (Mindlin–Deresiewicz)", """
-model = "halfspace"
-[halfspace]
-profile = "sphere"
-radius = 0.01
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-friction = 0.5
-[loading]
-P0 = 100.0
-Q1 = 30.0
-[run]
-cycles = 3
-steps_per_cycle = 400
-"""),
-    "sphere_out_of_phase": ("Sphere with normal and tangential loads a quarter-cycle apart", """
-model = "halfspace"
-[halfspace]
-profile = "sphere"
-radius = 0.01
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-friction = 0.5
-[loading]
-P0 = 100.0
-P1 = 40.0
-Q0 = 5.0
-Q1 = 25.0
-phase = 1.5707963267948966
-[run]
-cycles = 4
-steps_per_cycle = 400
-"""),
-    "rough_contact": ("Rough nominally flat contact, dP/dU = P/(γσ)", """
-model = "halfspace"
-[halfspace]
-profile = "rough_exponential"
-gamma_sigma = 1.0e-6
-nu = [0.3, 0.3]
-friction = 0.6
-[loading]
-P0 = 1000.0
-P1 = 400.0
-Q1 = 300.0
-phase = 1.0
-[run]
-cycles = 4
-steps_per_cycle = 400
-"""),
-    "discrete_two_node": ("Coupled two-node system under out-of-phase loads", """
-model = "discrete"
-[discrete]
-A = [[1.0, -0.3], [-0.3, 0.8]]
-B = [[0.4, 0.1], [-0.2, 0.3]]
-C = [[1.0, -0.2], [-0.2, 1.0]]
-friction = 0.5
-initial_slip = [0.0, 0.0]
-[loading]
-lam = 1.0
-p0 = [1.0, 1.0]
-q0 = [0.0, 0.0]
-p1 = [0.3, 0.2]
-p1_phase = [0.0, 1.0]
-q1 = [0.4, 0.5]
-q1_phase = [0.5, 2.0]
-[run]
-cycles = 40
-steps_per_cycle = 400
-"""),
-    "rods_microslip": ("Two steel rods, distributed interface, just past slip inception", """
-model = "rods"
-[rods]
-L = [0.5, 0.5]
-radius = [0.01, 0.01]
-E = [200e9, 200e9]
-nu = [0.3, 0.3]
-density = [7850.0, 7850.0]
-friction = 0.3
-axial_force = 1.0e4
-interface = "distributed"
-interface_stiffness = 1.0e13
-damping_ratio = 0.01
-modes = 50
-[loading]
-rotation_amplitude = 0.014
-frequency_ratio = 0.3
-"""),
+log = logging.getLogger("slipcycle")
+
+#: case name -> (title, shipped example file) of the demonstration report
+DEMO_FILES = {
+    "mindlin_sphere": ("Hertzian sphere, constant P, oscillating Q (Mindlin–Deresiewicz)",
+                       "halfspace_sphere"),
+    "sphere_out_of_phase": ("Sphere with normal and tangential loads a quarter-cycle apart",
+                            "halfspace_sphere_out_of_phase"),
+    "rough_contact": ("Rough nominally flat contact, dP/dU = P/(γσ)", "halfspace_rough"),
+    "discrete_two_node": ("Coupled two-node system under out-of-phase loads",
+                          "discrete_two_node"),
+    "rods_microslip": ("Two steel rods, distributed interface, just past slip inception",
+                       "rods_microslip"),
 }
 
+#: case name -> (title, TOML text) of the demonstration report, read from the example
+#: cases shipped with the package (:mod:`slipcycle.examples`)
+DEMO_CASES = {name: (title, example_text(file)) for name, (title, file) in DEMO_FILES.items()}
 
 
-def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None) -> Path:
+def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None, *,
+                 progress: Callable[[float, float], None] | None = None) -> Path:
     """Run every demo case into ``out`` and write ``out/report.md``.
 
     Parameters
@@ -121,10 +51,14 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None) 
         Case name -> (title, TOML text); default :data:`DEMO_CASES`. Each case is run by
         its model through :func:`slipcycle.run`.
 
+    progress : callable, optional
+        ``progress(done, total)`` after each case (and the map).
+
     Returns
     -------
     Path
-        ``out/report.md``. Progress lines (one per case) go to stdout.
+        ``out/report.md``. One diagnostic line per case goes to the ``slipcycle`` logger
+        (INFO).
     """
     # solvers, xarray and matplotlib load here, not when `slipcycle --help` lists commands
     import numpy as np
@@ -145,8 +79,10 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None) 
         dt = time.perf_counter() - t0
         s = to_jsonable(outputs.summary)
         unit = s.get("units", {}).get("dissipation_per_cycle", "")
-        print(f"[{i}/{len(cases) + 1}] {name}: dissipation_per_cycle = "
-              f"{s.get('dissipation_per_cycle')} {unit} ({dt:.1f} s)", flush=True)
+        log.info("[%d/%d] %s: dissipation_per_cycle = %s %s (%.1f s)", i, len(cases) + 1,
+                 name, s.get("dissipation_per_cycle"), unit, dt)
+        if progress is not None:
+            progress(i, len(cases) + 1)
         keys = [k for k in ("steady_state", "dissipation_per_cycle", "cycles_run",
                             "permanent_stick_size", "W_hat", "slipping_nodes", "f_crit",
                             "omega1", "torque_ratio", "dissipation_per_cycle_qs")
@@ -179,8 +115,10 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None) 
                  "units": {"W_hat": "1", "P1_hat": "1", "Q1_hat": "1", "phase": "rad"}},
         dataset=ds, figures={"w_hat_vs_phase": lambda: w_hat_vs_phase(ds, 0.4),
                              "w_hat_cubic_law": lambda: w_hat_cubic_law(q, Wq, "P̂1 = 0")}))
-    print(f"[{len(cases) + 1}/{len(cases) + 1}] rough_w_map "
-          f"({time.perf_counter() - t0:.1f} s)", flush=True)
+    log.info("[%d/%d] rough_w_map (%.1f s)", len(cases) + 1, len(cases) + 1,
+             time.perf_counter() - t0)
+    if progress is not None:
+        progress(len(cases) + 1, len(cases) + 1)
     lines += ["## Rough-surface dissipation map Ŵ(φ) (Barber, Frictional systems under "
               "periodic loads, Fig. 7)", "",
               "Ŵ = W/(λ γσ f² P0) against the phase φ at P̂1 = 0.4; gaps are load paths that "

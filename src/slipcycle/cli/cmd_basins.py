@@ -19,8 +19,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from slipcycle.cli.common import add_common, finish_study, study_options
-from slipcycle.discrete.sizes import count_option
+from slipcycle.cli.common import add_common, count_option, finish_study, study_options
 
 
 def add_parser(sub) -> None:

@@ -1,4 +1,4 @@
-"""``slipcycle demo --out DIR``: run the embedded example cases and write a report.
+"""``slipcycle demo --out DIR``: run shipped example cases and write a report.
 
 The report (``DIR/report.md``) lists each case, its key numbers and its figures; every
 case's own results (summary.json, result.nc, figures/) sit in ``DIR/<case>/``. The whole
@@ -9,13 +9,15 @@ interrupted demo leaves no partial report.
 from __future__ import annotations
 
 import argparse
+import importlib
 from pathlib import Path
+from typing import Any
 
-from slipcycle.demo import DEMO_CASES, write_report  # noqa: F401 - DEMO_CASES re-exported
+from slipcycle.cli.common import StageBar, progress_enabled
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("demo", help="run the embedded examples and write a report",
+    p = sub.add_parser("demo", help="run shipped example cases and write a report",
                        description=__doc__)
     p.add_argument("--out", type=Path, default=Path("demo-report"), help="report directory")
     p.set_defaults(execute=execute)
@@ -36,7 +38,11 @@ def execute(args: argparse.Namespace) -> int:
                                   dir=out.parent))
     try:
         # read at call time: tests may narrow the module's DEMO_CASES
-        report = write_report(stage, DEMO_CASES)
+        from slipcycle.demo import write_report
+
+        cases = globals().get("DEMO_CASES") or __getattr__("DEMO_CASES")
+        with StageBar(progress_enabled(args), "demo", total=len(cases) + 1) as bar:
+            report = write_report(stage, cases, progress=bar.update)
         if out.exists():
             old = out.with_name(f".{out.name}.partial-{os.getpid()}-old")
             out.rename(old)
@@ -46,5 +52,14 @@ def execute(args: argparse.Namespace) -> int:
             stage.rename(out)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
-    print(f"report written to {out / report.name}")
+    if not args.quiet:
+        print(f"report written to {out / report.name}")
     return 0
+
+
+def __getattr__(name: str) -> Any:
+    """``DEMO_CASES`` (of :mod:`slipcycle.demo`), loaded on first use so that the command
+    line starts without the solvers."""
+    if name == "DEMO_CASES":
+        return importlib.import_module("slipcycle.demo").DEMO_CASES
+    raise AttributeError(name)

@@ -16,8 +16,9 @@ interface law and numerical settings of ``slipcycle run`` for the same case.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
+
+from slipcycle.cli.common import print_result, progress_enabled
 
 
 def add_parser(sub) -> None:
@@ -34,16 +35,13 @@ def add_parser(sub) -> None:
 
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.io import read_case, write_outputs
-    from slipcycle.io.results import to_jsonable
     from slipcycle.rods.limits import limits_study, parse_limits
 
     case = read_case(args.case, models=["rods"])
     lc = parse_limits(case, args.tolerance, maps=not args.no_maps)
-    out = limits_study(lc, maps=not args.no_maps, progress=True).to_outputs()
+    out = limits_study(lc, maps=not args.no_maps, progress=progress_enabled(args)).to_outputs()
     write_outputs(args.out, out, case.text, case.path)
-    s = out.summary
-    print(json.dumps(to_jsonable({k: s[k] for k in (
+    print_result(args, out.summary, (
         "omega1", "qs_limit_frequency_ratio", "qs_limit_frequency_ratio_status",
-        "qs_limit_frequency_ratio_dissipation", "poles_frequency_ratio")}), indent=2))
-    print(f"results written to {args.out}/")
+        "qs_limit_frequency_ratio_dissipation", "poles_frequency_ratio"))
     return 0

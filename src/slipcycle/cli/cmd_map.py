@@ -11,8 +11,12 @@ carry its map) and are not used: Ŵ is dimensionless; W = λ_c γσ f² P0 Ŵ.
 from __future__ import annotations
 
 import argparse
-import json
+import logging
 from pathlib import Path
+
+from slipcycle.cli.common import StageBar, print_result, progress_enabled
+
+log = logging.getLogger("slipcycle")
 
 
 def add_parser(sub) -> None:
@@ -29,12 +33,12 @@ def execute(args: argparse.Namespace) -> int:
 
     case = read_case(args.case, models=["halfspace"])
     P1, Q1, ph, fig_P1, fig_Q1, settings = parse_map_case(case)
-    print(f"computing W_hat on {P1.size} x {Q1.size} x {ph.size} = {P1.size * Q1.size * ph.size}"
-          " points ...", flush=True)
-    outputs = w_hat_map_study(P1, Q1, ph, fig_P1, fig_Q1, settings).to_outputs()
-    summary = outputs.summary
-    write_outputs(args.out, outputs, case.text, case.path)
-    print(json.dumps({k: summary[k] for k in ("grid_points", "wall_time_s", "cubic_law_slope",
-                                              "fig7_phase_of_max")}, indent=2))
-    print(f"results written to {args.out}/")
+    log.info("computing W_hat on %d x %d x %d = %d points", P1.size, Q1.size, ph.size,
+             P1.size * Q1.size * ph.size)
+    with StageBar(progress_enabled(args), "W_hat map") as bar:
+        outputs = w_hat_map_study(P1, Q1, ph, fig_P1, fig_Q1, settings).to_outputs()
+        bar.stage("write")
+        write_outputs(args.out, outputs, case.text, case.path)
+    print_result(args, outputs.summary, ("grid_points", "wall_time_s", "cubic_law_slope",
+                                         "fig7_phase_of_max"))
     return 0

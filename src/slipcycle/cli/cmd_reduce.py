@@ -23,13 +23,13 @@ def add_parser(sub) -> None:
                         "state it (default tangential_first)")
     p.add_argument("--case", type=Path, default=None,
                    help="also write a discrete case file using [fe.discrete]")
-    p.add_argument("--quiet", action="store_true", help="print nothing on success")
     p.set_defaults(execute=execute)
 
 
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.fe.files import import_stiffness, reduce_model
     from slipcycle.io import CaseError
+    from slipcycle.io.results import to_jsonable
 
     if args.out.suffix.lower() != ".npz":
         raise CaseError("--out", f"must name an .npz file, got {args.out}")
@@ -42,6 +42,6 @@ def execute(args: argparse.Namespace) -> int:
     else:
         info = reduce_model(args.model, args.out, args.case)
     if not args.quiet:
-        print(json.dumps(info, indent=2))
+        print(json.dumps(to_jsonable(info), indent=2, default=str))
         print(f"reduced model written to {args.out}")
     return 0

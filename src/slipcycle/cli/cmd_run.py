@@ -1,10 +1,19 @@
-"""``slipcycle run CASE.toml --out DIR``: validate, solve, write results."""
+"""``slipcycle run CASE.toml --out DIR``: validate, solve, write results.
+
+Writes ``DIR/summary.json`` (the numbers, with their ``units`` and the provenance),
+``DIR/result.nc`` (CF-1.10 netCDF of the full histories) and ``DIR/figures/*.png``, then
+prints the summary. Only the case's model is imported.
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
+import logging
 from pathlib import Path
+
+from slipcycle.cli.common import StageBar, Timer, print_result, progress_enabled
+
+log = logging.getLogger("slipcycle")
 
 
 def add_parser(sub) -> None:
@@ -12,20 +21,23 @@ def add_parser(sub) -> None:
                        description=__doc__)
     p.add_argument("case", type=Path, help="TOML case file")
     p.add_argument("--out", type=Path, required=True, help="output directory")
-    p.add_argument("--quiet", action="store_true", help="do not print the summary")
     p.set_defaults(execute=execute)
 
 
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.api import run
     from slipcycle.io import read_case, write_outputs
-    from slipcycle.io.results import to_jsonable
     from slipcycle.registry import RUN_MODELS
 
+    clock = Timer()
     case = read_case(args.case, models=list(RUN_MODELS))
-    outputs = run(case).to_outputs()
-    write_outputs(args.out, outputs, case.text, case.path)
-    if not args.quiet:
-        print(json.dumps(to_jsonable(outputs.summary), indent=2))
-        print(f"results written to {args.out}/")
+    log.info("case %s (model %s) read in %s", args.case, case.model, clock)
+    with StageBar(progress_enabled(args), f"{case.model}: solve") as bar:
+        result = run(case, progress=bar.update)
+        log.info("solved in %s", clock)
+        bar.stage(f"{case.model}: write")
+        outputs = result.to_outputs()
+        write_outputs(args.out, outputs, case.text, case.path)
+    log.info("results written in %s", clock)
+    print_result(args, outputs.summary)
     return 0

@@ -1,9 +1,184 @@
-"""Options shared by the commands that run through the sweep engine (sweep, basins,
-shakedown)."""
+"""Options and helpers shared by the commands.
+
+Every command takes the output options of :func:`conventions_parent`: ``-q/--quiet``
+(results files only, nothing printed but errors), ``-v/--verbose`` (diagnostics; twice for
+debugging detail), ``--no-progress`` and ``--progress`` (progress bars go to stderr, by
+default only when stderr is a terminal). Diagnostics use :mod:`logging` (logger
+``slipcycle``) and go to stderr; the results headline goes to stdout.
+
+This module imports only the standard library: it is loaded for ``slipcycle --help``.
+"""
 
 from __future__ import annotations
 
 import argparse
+import logging
+import re
+import sys
+import threading
+import time
+
+EXIT_BAD_INPUT = 2
+EXIT_SOLVER = 3
+EXIT_INTERNAL = 4
+
+log = logging.getLogger("slipcycle")
+
+
+# -- output conventions (every command) ----------------------------------------------------
+
+_ROLE = re.compile(r":(?:func|class|meth|mod|data|attr|obj|exc|ref|doc):`(~?)([^`<]*?)"
+                   r"(?:\s*<[^>]*>)?`")
+_LITERAL = re.compile(r"``([^`]+)``")
+
+
+def plain(text: str) -> str:
+    """``text`` without reST markup, for ``--help``: roles become their target (its last
+    component for ``~``: ``:func:`~a.b.f``` -> ``f``), double-backtick literals their
+    content."""
+    def role(m: re.Match) -> str:
+        name = m.group(2).strip()
+        return name.rsplit(".", 1)[-1] if m.group(1) else name
+
+    return _LITERAL.sub(r"\1", _ROLE.sub(role, text))
+
+
+def conventions_parent() -> argparse.ArgumentParser:
+    """A parent parser with ``--quiet``, ``--verbose``, ``--no-progress``, ``--progress``."""
+    p = argparse.ArgumentParser(add_help=False)
+    g = p.add_argument_group("output")
+    g.add_argument("-q", "--quiet", action="store_true",
+                   help="print nothing but errors (results are still written)")
+    g.add_argument("-v", "--verbose", action="count", default=0,
+                   help="print diagnostics on stderr (twice: debugging detail)")
+    bar = g.add_mutually_exclusive_group()
+    bar.add_argument("--no-progress", action="store_true", help="no progress bar")
+    bar.add_argument("--progress", action="store_true",
+                     help="show progress bars even when stderr is not a terminal")
+    return p
+
+
+class _StderrHandler(logging.StreamHandler):
+    """A handler writing to the current ``sys.stderr`` (which tests and callers may swap)."""
+
+    def __init__(self):
+        super().__init__(sys.stderr)
+
+    @property
+    def stream(self):  # type: ignore[override]
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value):  # the base class assigns it; the current stderr wins
+        pass
+
+
+def configure_logging(args: argparse.Namespace) -> int:
+    """Set the level of the ``slipcycle`` logger from ``--quiet``/``--verbose``.
+
+    Warnings by default, errors only with ``--quiet``, INFO with ``-v``, DEBUG with
+    ``-vv``; messages go to stderr as ``slipcycle: <message>``. Returns the level.
+    """
+    if getattr(args, "quiet", False):
+        level = logging.ERROR
+    else:
+        level = {0: logging.WARNING, 1: logging.INFO}.get(getattr(args, "verbose", 0),
+                                                          logging.DEBUG)
+    for h in list(log.handlers):
+        if isinstance(h, _StderrHandler):
+            log.removeHandler(h)
+    handler = _StderrHandler()
+    handler.setFormatter(logging.Formatter("slipcycle: %(message)s"))
+    log.addHandler(handler)
+    log.setLevel(level)
+    log.propagate = False
+    return level
+
+
+def progress_enabled(args: argparse.Namespace) -> bool:
+    """Whether to draw progress bars: ``--progress`` forces them; ``--no-progress`` and
+    ``--quiet`` turn them off; otherwise only when stderr is a terminal."""
+    if getattr(args, "no_progress", False) or getattr(args, "quiet", False):
+        return False
+    if getattr(args, "progress", False):
+        return True
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+class StageBar:
+    """A progress bar (tqdm, stderr) for a command made of a few long stages.
+
+    ``update(done, total)`` is the progress callback of :func:`slipcycle.run` (a solver
+    that reports its progress moves the bar); ``stage(name)`` names the current stage. The
+    elapsed time keeps ticking while a stage that reports nothing runs. Does nothing when
+    disabled.
+    """
+
+    def __init__(self, enabled: bool, desc: str, total: float = 1.0):
+        self._bar = None
+        self._stop = threading.Event()
+        if not enabled:
+            return
+        from tqdm import tqdm
+
+        self._bar = tqdm(total=total, desc=desc, file=sys.stderr, leave=False,
+                         bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}")
+        self._ticker = threading.Thread(target=self._tick, daemon=True)
+        self._ticker.start()
+
+    def _tick(self) -> None:
+        while not self._stop.wait(0.5):
+            if self._bar is not None:
+                self._bar.refresh()
+
+    def update(self, done: float, total: float | None = None) -> None:
+        """Set the fraction done (``done`` of ``total``)."""
+        if self._bar is None:
+            return
+        if total:
+            self._bar.total = total
+        self._bar.n = done
+        self._bar.refresh()
+
+    def stage(self, name: str) -> None:
+        """Show the name of the current stage."""
+        if self._bar is not None:
+            self._bar.set_description_str(name, refresh=True)
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class Timer:
+    """Seconds since creation (for ``--verbose`` diagnostics)."""
+
+    def __init__(self):
+        self.t0 = time.perf_counter()
+
+    def __str__(self) -> str:
+        return f"{time.perf_counter() - self.t0:.2f} s"
+
+
+# -- options of the sweep-based commands (sweep, basins, shakedown) -----------------------
+
+def count_option(text: str) -> int:
+    """argparse ``type`` of a count option (integer, also ``1e6``); the discrete models'
+    reader, loaded when such an option is given."""
+    from slipcycle.discrete.sizes import count_option as parse
+
+    return parse(text)
 
 
 class _Workers(argparse.Action):
@@ -29,8 +204,23 @@ def add_common(p) -> None:
                    help="address of an existing Dask scheduler, e.g. tcp://10.0.0.1:8786")
     p.add_argument("--resume", action="store_true",
                    help="complete an interrupted run from its Zarr store")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--stop-after", type=int, default=None, help=argparse.SUPPRESS)
+
+
+def print_result(args: argparse.Namespace, summary: dict, keys=None) -> None:
+    """Print the results headline (JSON of ``summary``, or of its ``keys``) and where the
+    results went, unless ``--quiet``."""
+    import json
+
+    from slipcycle.io.results import to_jsonable
+
+    if getattr(args, "quiet", False):
+        return
+    shown = summary if keys is None else {k: summary[k] for k in keys if k in summary}
+    print(json.dumps(to_jsonable(shown), indent=2, default=str))
+    out = getattr(args, "out", None)
+    if out is not None:
+        print(f"results written to {out}/")
 
 
 def finish_study(status, args: argparse.Namespace, case, keys: tuple[str, ...], *,
@@ -38,23 +228,20 @@ def finish_study(status, args: argparse.Namespace, case, keys: tuple[str, ...], 
     """End a resumable command: report progress if it stopped early; otherwise write its
     outputs (unless the study wrote them itself), print the ``keys`` of its summary as JSON
     and where the results went. Returns the exit code (0)."""
-    import json
-
     from slipcycle.io import write_outputs
 
     if not status.complete:
-        print(f"{what} with {status.cells_done} of {status.cells_total} {unit} done; "
-              "complete it with --resume", flush=True)
+        if not args.quiet:
+            print(f"{what} with {status.cells_done} of {status.cells_total} {unit} done; "
+                  "complete it with --resume", flush=True)
         return 0
     if write:
         write_outputs(args.out, status.outputs, case.text, case.path)
-    summary = status.outputs.summary
-    print(json.dumps({k: summary[k] for k in keys}, indent=2, default=str))
-    print(f"results written to {args.out}/")
+    print_result(args, status.outputs.summary, keys)
     return 0
 
 
 def study_options(args: argparse.Namespace) -> dict:
     """The keyword arguments of the library's resumable studies from the common options."""
     return {"workers": args.workers, "scheduler": args.scheduler, "resume": args.resume,
-            "progress": not args.no_progress, "stop_after": args.stop_after}
+            "progress": progress_enabled(args), "stop_after": args.stop_after}

@@ -5,6 +5,13 @@ Each sub-command lives in its own module of this package with two functions,
 Invalid input ends with one line ``error: <key>: <problem>`` on stderr and exit code 2; a
 solver that cannot proceed on a valid model (:class:`~slipcycle.errors.SolverError`) with
 ``error: solver: <problem>`` and exit code 3. No result files are left in either case.
+
+Start-up is kept short: this module and the command modules import only the standard
+library at load time, so ``slipcycle --help``, ``--version`` and argument errors answer
+without NumPy; each command imports its model when it runs. Every command takes
+``--quiet``, ``--verbose`` and ``--no-progress``/``--progress`` (:mod:`slipcycle.cli.common`):
+results go to stdout, diagnostics to stderr through :mod:`logging`, progress bars to stderr
+when it is a terminal.
 """
 
 from __future__ import annotations
@@ -14,12 +21,20 @@ import importlib
 import sys
 
 from slipcycle._version import __version__
+from slipcycle.cli.common import (
+    EXIT_BAD_INPUT,
+    EXIT_INTERNAL,
+    EXIT_SOLVER,
+    configure_logging,
+    conventions_parent,
+    plain,
+)
 
-COMMANDS = ["run", "demo", "map", "reduce", "limits", "shakedown", "basins", "sweep"]
+__all__ = ["COMMANDS", "EXIT_BAD_INPUT", "EXIT_SOLVER", "EXIT_INTERNAL", "build_parser",
+           "main"]
 
-EXIT_BAD_INPUT = 2
-EXIT_SOLVER = 3
-EXIT_INTERNAL = 4
+COMMANDS = ["run", "demo", "examples", "map", "reduce", "limits", "shakedown", "basins",
+            "sweep", "roughness"]
 
 #: optional dependencies -> the extra that installs them (``pip install 'slipcycle[X]'``)
 EXTRAS = {
@@ -41,17 +56,37 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_BAD_INPUT, f"error: {self.prog}: {_one_line(message)} "
                   f"(see '{self.prog} --help')\n")
 
+    def format_help(self) -> str:
+        # descriptions are the command modules' docstrings: show them without reST markup
+        return plain(super().format_help())
+
+
+class _Commands:
+    """The sub-parsers action, giving every command the shared output options."""
+
+    def __init__(self, sub, parent: argparse.ArgumentParser):
+        self._sub, self._parent = sub, parent
+
+    def add_parser(self, name: str, **kwargs):
+        kwargs["parents"] = [*kwargs.get("parents", ()), self._parent]
+        return self._sub.add_parser(name, **kwargs)
+
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``slipcycle`` argument parser (imports the command modules, nothing heavier)."""
     parser = _Parser(
         prog="slipcycle",
-        description="Frictional interfaces under periodic loading.",
+        description="Frictional interfaces under periodic loading: coupled discrete "
+                    "frictional systems, half-space microslip, rods, finite-element "
+                    "reduction, sweeps. 'slipcycle COMMAND --help' describes a command; "
+                    "'slipcycle examples' lists the shipped example cases.",
     )
     parser.add_argument("--version", action="version", version=f"slipcycle {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
+    commands = _Commands(sub, conventions_parent())
     for name in COMMANDS:
-        importlib.import_module(f"slipcycle.cli.cmd_{name}").add_parser(sub)
+        importlib.import_module(f"slipcycle.cli.cmd_{name}").add_parser(commands)
     return parser
 
 
@@ -83,6 +118,21 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+def _execute(args: argparse.Namespace) -> int:
+    """Run the command; xarray is kept from importing dask unless a Dask scheduler is used
+    (:func:`slipcycle.io.results.dask_not_imported`)."""
+    if not getattr(args, "writes_results", True):
+        return int(args.execute(args) or 0)
+    _check_extras(args)
+    _check_outputs(args)
+    if getattr(args, "scheduler", None):
+        return int(args.execute(args) or 0)
+    from slipcycle.io.results import dask_not_imported
+
+    with dask_not_imported():
+        return int(args.execute(args) or 0)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``slipcycle`` command; returns the exit code.
 
@@ -92,14 +142,21 @@ def main(argv: list[str] | None = None) -> int:
     """
     import os
 
+    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    # figures are files: the non-interactive backend, no GUI toolkit probed
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    args = parser.parse_args(argv)
+    configure_logging(args)
+    if args.command != "examples":
+        from slipcycle.io.metadata import set_command_line
+
+        set_command_line(["slipcycle", *argv])
+
     from slipcycle.errors import InputError, SolverError
 
-    parser = build_parser()
-    args = parser.parse_args(argv)
     try:
-        _check_extras(args)
-        _check_outputs(args)
-        return int(args.execute(args) or 0)
+        return _execute(args)
     except InputError as exc:
         print(f"error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -109,6 +166,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader of stdout went away (``slipcycle examples | head``): not an error
+        try:
+            sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - until the process exits
+        except OSError:
+            pass
+        return 0
     except ModuleNotFoundError as exc:
         top = (exc.name or "").split(".")[0]
         if top in EXTRAS:

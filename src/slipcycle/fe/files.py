@@ -54,9 +54,11 @@ def import_stiffness(model: Path, out: Path, dof_order: str | None = None) -> di
     try:  # every export format slipcycle reads (docs/discrete.md), one reader
         red = read_reduced_stiffness(model, dof_map=dof_order)
     except StiffnessError as exc:
-        # a problem of the file as a whole is a problem of its stiffness K
-        key = "K" if exc.key in (str(model), model.name) else exc.key
-        raise CaseError(f"{model.name}:{key}", exc.problem) from None
+        if exc.key not in (str(model), model.name):
+            raise CaseError(f"{model.name}:{exc.key}", exc.problem) from None
+        # the file itself (unreadable, not the format) or the matrix it holds
+        about_k = exc.problem.startswith(("K ", "the reduced K", "the retained"))
+        raise CaseError(f"{model.name}:K" if about_k else model.name, exc.problem) from None
     except ValueError as exc:
         raise CaseError(model.name, str(exc)) from None
     meta = provenance("", model.resolve())

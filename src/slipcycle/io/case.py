@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from slipcycle.errors import InputError
+from slipcycle.io.sniff import describe
 from slipcycle.registry import MODEL_COMMANDS
 
 __all__ = ["Case", "CaseError", "Section", "read_case", "parse_case_text", "MODEL_COMMANDS"]
@@ -344,6 +345,10 @@ def parse_case_text(text: str, path: Path | None = None, models: Sequence[str] |
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
+        kind = describe(where, text[:4096].encode("latin-1", "replace"))
+        if kind is not None:  # a matrix export given where the case file goes
+            raise CaseError(where, f"is {kind}, not a TOML case file; name it in a case "
+                            "file: [discrete] stiffness_file = \"...\"") from None
         raise CaseError(where, f"not a valid TOML case file: {exc}") from None
     model = data.get("model", _MISSING)
     if model is _MISSING:
@@ -377,7 +382,10 @@ def read_text_file(path: str | Path, what: str = "case file") -> str:
     except OSError as exc:
         raise CaseError(str(path), f"cannot read {what}: {exc.strerror or exc}") from None
     if b"\x00" in raw:
-        raise CaseError(str(path), f"is a binary file, not a {what} (TOML text)")
+        kind = describe(path, raw[:4096])
+        raise CaseError(str(path), f"is {kind}, not a {what} (TOML text); name it in a case "
+                        "file: [discrete] stiffness_file = \"...\"" if kind else
+                        f"is a binary file, not a {what} (TOML text)")
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -2,31 +2,139 @@
 
 Outputs are staged in a temporary directory beside the target and moved into place only
 when every file has been written, so a run that fails leaves nothing that looks like a
-result. Every output carries the case text, the slipcycle version and units.
+result. Every output carries the case text, units and the provenance of
+:func:`slipcycle.io.metadata.provenance` (versions, platform, command line); ``result.nc``
+is completed to the CF-1.10 conventions in one place, :func:`write_netcdf`. Figures are
+drawn with the non-interactive Agg backend. xarray is imported only when a Dataset is
+written, and kept from importing dask where none is used (:func:`dask_not_imported`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import math
 import os
 import shutil
+import sys
 import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 
-from slipcycle._version import __version__
+from slipcycle.io.metadata import provenance
+
+if TYPE_CHECKING:  # pragma: no cover
+    import xarray as xr
+
+log = logging.getLogger("slipcycle")
 
 __all__ = ["RunOutputs", "write_outputs", "provenance", "to_jsonable", "check_output_dir",
-           "check_output_file", "remove_stale_partials", "write_together"]
+           "check_output_file", "remove_stale_partials", "write_together", "write_netcdf",
+           "defer_dask_detection", "dask_not_imported"]
 
 RESULT_FILES = ("summary.json", "result.nc", "figures")
+
+
+class _DeferredDask:
+    """xarray's record of the ``dask`` duck-array module, resolved only once
+    ``dask.array`` has been imported by someone.
+
+    xarray asks, on the first Dataset it builds, whether each variable is a dask array, and
+    answers by importing dask (about 1-2 s when the sweep extra is installed). No object can
+    be a dask array before ``dask.array`` is imported, so until then the answer "no dask
+    array types" is exact; afterwards the real record is built and used.
+    """
+
+    def __init__(self, real_factory):
+        self._factory = real_factory
+        self._real = None
+
+    def _resolved(self):
+        if self._real is None and "dask.array" in sys.modules:
+            self._real = self._factory("dask")
+        return self._real
+
+    @property
+    def type(self):
+        real = self._resolved()
+        return real.type if real is not None else ()
+
+    @property
+    def module(self):
+        real = self._resolved()
+        return real.module if real is not None else None
+
+    @property
+    def available(self):
+        real = self._resolved()
+        return real.available if real is not None else False
+
+    @property
+    def version(self):
+        real = self._resolved()
+        if real is not None:
+            return real.version
+        from packaging.version import Version
+
+        return Version("0.0.0")
+
+
+def defer_dask_detection() -> bool:
+    """Keep xarray from importing dask until dask arrays can exist (see
+    :class:`_DeferredDask`). Returns True if the deferral is in place."""
+    try:
+        from xarray.namedarray import pycompat
+    except ImportError:  # another xarray layout: leave it alone
+        return False
+    cache = getattr(pycompat, "_cached_duck_array_modules", None)
+    factory = getattr(pycompat, "DuckArrayModule", None)
+    if not isinstance(cache, dict) or factory is None:
+        return False
+    if "dask" not in cache and "dask.array" not in sys.modules:
+        cache["dask"] = _DeferredDask(factory)
+    return isinstance(cache.get("dask"), _DeferredDask)
+
+
+@contextlib.contextmanager
+def dask_not_imported():
+    """Within the block, xarray sees dask as absent unless dask is loaded already.
+
+    xarray asks, for every Dataset it builds and every netCDF file it writes, whether a
+    value is a dask collection and which dask scheduler is active, importing dask to learn
+    it (1-2 s where the sweep extra is installed). Before dask is imported no dask
+    collection and no dask computation can exist, so "no dask" is the exact answer: the
+    block makes ``import dask`` fail (``sys.modules["dask"] = None``) and keeps xarray from
+    caching the failure (:func:`defer_dask_detection`). Nothing changes if dask is already
+    loaded. For code that uses no dask (the command line around a command that does not
+    use a Dask scheduler, :func:`write_outputs`); not thread-safe against a thread that
+    imports dask meanwhile.
+    """
+    if "dask" in sys.modules:
+        yield
+        return
+    sys.modules["dask"] = None  # type: ignore[assignment]  # import dask -> ImportError
+    try:
+        defer_dask_detection()
+        _forget_module_checks()
+        yield
+    finally:
+        if sys.modules.get("dask", 0) is None:
+            del sys.modules["dask"]
+        _forget_module_checks()
+
+
+def _forget_module_checks() -> None:
+    """Clear xarray's cache of which optional modules are installed (it holds the answer
+    for dask from before or inside :func:`dask_not_imported`)."""
+    utils = sys.modules.get("xarray.namedarray.utils")
+    check = getattr(utils, "module_available", None)
+    if hasattr(check, "cache_clear"):
+        check.cache_clear()
 
 
 @dataclass
@@ -59,17 +167,6 @@ class RunOutputs:
     flags: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
 
-def provenance(case_text: str | None, case_path: Path | None = None) -> dict:
-    """Metadata attached to every result: version, case text, time."""
-    return {
-        "slipcycle_version": __version__,
-        "case_file": str(case_path) if case_path else "",
-        "case": case_text or "",
-        "created": datetime.now(UTC).isoformat(timespec="seconds"),
-        "units": "SI (N, m, Pa, J, rad, s)",
-    }
-
-
 def to_jsonable(obj: Any) -> Any:
     """Convert NumPy scalars/arrays (recursively) to JSON types; non-finite floats to None."""
     if isinstance(obj, Mapping):
@@ -100,11 +197,6 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
     Path
         ``out_dir``.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     out_dir = Path(out_dir)
     check_output_dir(out_dir)
     try:
@@ -117,20 +209,21 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
     meta = provenance(case_text, case_path)
     try:
         summary = dict(outputs.summary)
+        summary.setdefault("units", {})
         summary["metadata"] = {k: v for k, v in meta.items() if k != "case"}
         (stage / "summary.json").write_text(
             json.dumps(to_jsonable(summary), indent=2, allow_nan=False) + "\n", encoding="utf-8"
         )
         if outputs.dataset is not None:
-            ds = outputs.dataset.copy()
-            ds.attrs.update(meta)
-            ds.to_netcdf(stage / "result.nc")
+            write_netcdf(stage / "result.nc", outputs.dataset, meta,
+                         summary.get("units"), outputs.flags)
         if outputs.figures:
             (stage / "figures").mkdir()
-            for name, make in outputs.figures.items():
-                fig = make()
-                fig.savefig(stage / "figures" / f"{name}.png", dpi=120)
-                plt.close(fig)
+            with _figure_backend() as plt:
+                for name, make in outputs.figures.items():
+                    fig = make()
+                    fig.savefig(stage / "figures" / f"{name}.png", dpi=120)
+                    plt.close(fig)
         for rel, writer in outputs.extra_files.items():
             target = stage / rel
             target.parent.mkdir(parents=True, exist_ok=True)
@@ -143,6 +236,37 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
     return out_dir
 
 
+def write_netcdf(path: Path, dataset: xr.Dataset, meta: Mapping | None = None,
+                 units: Mapping[str, str] | None = None,
+                 flags: Mapping[str, tuple[str, ...]] | None = None) -> None:
+    """Write ``dataset`` to ``path`` as CF-1.10 netCDF with the provenance ``meta``.
+
+    The Dataset is completed by :func:`slipcycle.io.metadata.cf_complete` (coordinate
+    variables, ``long_name``/``units`` from the variables or the summary ``units``, flag
+    attributes, ``Conventions``); what is still missing is logged (INFO). The global
+    attributes are :func:`slipcycle.io.metadata.netcdf_attributes` of ``meta``.
+    """
+    from slipcycle.io.metadata import cf_complete, cf_problems, netcdf_attributes
+
+    ds = cf_complete(dataset, units, flags)
+    ds.attrs.update(netcdf_attributes(meta or provenance(None)))
+    for problem in cf_problems(ds):
+        log.info("result.nc: CF: %s", problem)
+    with dask_not_imported():
+        ds.to_netcdf(path)
+
+
+@contextlib.contextmanager
+def _figure_backend():
+    """matplotlib.pyplot on the non-interactive Agg backend (no display is needed, and
+    no GUI toolkit is loaded)."""
+    import matplotlib
+
+    if matplotlib.get_backend().lower() != "agg":
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    yield plt
 
 
 def write_together(outputs: list[tuple[Path, Callable[[Path], None]]]) -> None:

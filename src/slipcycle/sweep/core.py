@@ -30,8 +30,9 @@ unreachable Dask schedulers are refused before anything is created. A task may r
 :class:`CellOutputs` to describe its outputs (units, CF flags), stored on the arrays.
 
 Performance notes (measured on the 2-core reference machine, ``benchmarks/
-bench_shakedown.py``): a spawned worker pays its imports, case validation and Numba cache
-loading once (≈ 2 s for a 200-node discrete case); each local worker gets
+bench_shakedown.py``): local workers are forked from a fork server that imported the task's
+module and initialised Numba once (:func:`pool_context`), so a worker pays only its case
+validation and the loading of its kernels from Numba's disk cache; each local worker gets
 ``cores // workers`` Numba threads so that ``prange`` kernels do not oversubscribe the
 cores; ``group_by`` sends cells that share per-process cached set-up (the random starts of
 one λ: 24 LPs) to one worker as one task, so the set-up is done once per group rather
@@ -56,6 +57,7 @@ import threading
 from collections.abc import Callable, Mapping
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -65,7 +67,8 @@ from slipcycle.io.sizes import format_bytes
 
 __all__ = ["Axis", "SweepStore", "run_sweep", "SweepError", "fingerprint", "TaskRunner",
            "run_group", "worker_threads", "CellOutputs", "lock_store", "check_size",
-           "connect_scheduler", "MAX_CELLS", "SCHEDULER_TIMEOUT_S"]
+           "connect_scheduler", "MAX_CELLS", "SCHEDULER_TIMEOUT_S", "pool_context",
+           "WORKER_PRELOAD"]
 
 #: most cells one sweep may have: a store keeps one Zarr chunk file per cell and output,
 #: and the sweep keeps a few hundred bytes of bookkeeping per cell in memory
@@ -455,14 +458,40 @@ def _worker_init(threads: int, parent: int | None = None) -> None:
     import numba
 
     numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    _limit_blas_threads(threads)
+
+
+def _limit_blas_threads(threads: int) -> None:
+    """Cap the BLAS/OpenMP thread pools of this worker at ``threads``: the workers share
+    the cores, and BLAS threads that wait by spinning slow every worker down many times
+    over (a case's well-posedness check, eigenvalues of N × N matrices, took seconds
+    instead of milliseconds with two workers of two BLAS threads each on two cores).
+    Uses ``threadpoolctl`` where installed; otherwise the pools stay as they are."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - optional
+        return
+    threadpool_limits(limits=max(1, int(threads)))
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # pragma: no cover - someone else's process
+        return True
+    return True
 
 
 def _die_with_parent(parent: int, poll_s: float = 0.5) -> None:
-    """End this process when ``parent`` ends.
+    """End this process when ``parent`` (the sweep's process) ends.
 
-    On Linux the kernel sends SIGKILL at the parent's death (``prctl(PR_SET_PDEATHSIG)``);
-    a daemon thread that watches the parent's pid covers other systems and the moment
-    before the ``prctl`` call.
+    On Linux the kernel sends SIGKILL at the death of the process that started this one
+    (``prctl(PR_SET_PDEATHSIG)``): the sweep's process for ``spawn`` workers, or the fork
+    server, which itself ends when the sweep's process ends, for forked workers
+    (:func:`pool_context`). A daemon thread that watches the direct parent (and the
+    sweep's process) covers other systems and the moment before the ``prctl`` call.
     """
     if sys.platform.startswith("linux"):
         try:
@@ -473,13 +502,15 @@ def _die_with_parent(parent: int, poll_s: float = 0.5) -> None:
             libc.prctl(1, signal.SIGKILL, 0, 0, 0)      # 1 = PR_SET_PDEATHSIG
         except (OSError, AttributeError):               # pragma: no cover - no prctl
             pass
-    if os.getppid() != parent:                          # the parent died already
+    direct = os.getppid()             # the sweep's process, or the fork server
+    if direct != parent and not _pid_alive(parent):     # the sweep died already
         os._exit(1)
 
     def watch():
         import time
 
-        while os.getppid() == parent:
+        # a dead direct parent re-parents this process (getppid changes)
+        while os.getppid() == direct and (direct == parent or _pid_alive(parent)):
             time.sleep(poll_s)
         os._exit(1)
 
@@ -644,9 +675,9 @@ def _run_locked(fn, axes, store, *, resume, workers, client, progress, stop_afte
             for task in tasks:
                 writer.put(task, run_group(fn, [_params(axes, i) for i in task]))
         elif runner is not None:
-            _run_pool(fn, axes, tasks, nproc, writer, runner.pool())
+            _run_pool(fn, axes, tasks, nproc, writer, runner.pool(fn))
         else:
-            with _local_pool(min(nproc, len(tasks))) as pool:
+            with _local_pool(min(nproc, len(tasks)), fn) as pool:
                 _run_pool(fn, axes, tasks, min(nproc, len(tasks)), writer, pool)
     finally:
         bar.close()
@@ -825,12 +856,47 @@ def connect_scheduler(address, timeout: float | None = None):
     return client, True
 
 
-def _local_pool(workers: int):
-    """A ``spawn`` process pool whose workers share out the cores' Numba threads."""
+#: modules the fork server of local workers imports once (see :func:`pool_context`)
+WORKER_PRELOAD = ("slipcycle.sweep.core", "slipcycle.sweep._preload")
+
+
+def _task_modules(fn) -> list[str]:
+    """The modules that define ``fn`` (a function or a ``functools.partial`` of one)."""
+    while isinstance(fn, partial):
+        fn = fn.func
+    mod = getattr(fn, "__module__", None)
+    return [mod] if mod and mod.startswith("slipcycle.") else []
+
+
+def pool_context(fn=None):
+    """The multiprocessing context of local workers.
+
+    A fork server (POSIX) that has imported the sweep engine, the module of the task
+    ``fn`` (NumPy, SciPy, the model) and initialised Numba once
+    (:mod:`slipcycle.sweep._preload`): each worker is then a fork of that warm,
+    single-threaded server, ready in a fraction of a second and sharing its compiled
+    kernels through Numba's on-disk cache, instead of a fresh interpreter importing
+    everything again (``spawn``: 1-2 s per worker, more on a loaded machine). The server
+    starts with the first pool of this process and serves every later one; it holds no
+    Numba or Dask threads, so forking it is safe. ``spawn`` where fork servers do not
+    exist (Windows) or ``SLIPCYCLE_WORKER_START=spawn``.
+    """
     import multiprocessing as mp
 
-    # "spawn" avoids forking a process that holds Numba/Dask threads
-    return ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("spawn"),
+    method = os.environ.get("SLIPCYCLE_WORKER_START", "forkserver")
+    if method not in mp.get_all_start_methods():
+        method = "spawn"
+    ctx = mp.get_context(method)
+    if method == "forkserver":
+        # the list is read when the server starts (first pool); later calls change nothing
+        ctx.set_forkserver_preload([*WORKER_PRELOAD, *_task_modules(fn)])
+    return ctx
+
+
+def _local_pool(workers: int, fn=None):
+    """A process pool (:func:`pool_context`) whose workers share out the cores' Numba
+    threads and die with this process."""
+    return ProcessPoolExecutor(max_workers=workers, mp_context=pool_context(fn),
                                initializer=_worker_init,
                                initargs=(worker_threads(workers), os.getpid()))
 
@@ -940,10 +1006,11 @@ class TaskRunner:
             self._client, self._own_client = connect_scheduler(self.scheduler)
         return self._client
 
-    def pool(self) -> ProcessPoolExecutor:
-        """The local process pool (started on first use)."""
+    def pool(self, fn=None) -> ProcessPoolExecutor:
+        """The local process pool (started on first use; ``fn``: a task it will run,
+        whose module the workers import once, see :func:`pool_context`)."""
         if self._pool is None:
-            self._pool = _local_pool(self.workers)
+            self._pool = _local_pool(self.workers, fn)
         return self._pool
 
     def map(self, fn: Callable[[dict], Mapping], params: list[dict]) -> list:
@@ -960,7 +1027,7 @@ class TaskRunner:
                 raise
         if self.workers <= 1 or len(params) == 1:
             return [fn(p) for p in params]
-        futs = [self.pool().submit(fn, p) for p in params]
+        futs = [self.pool(fn).submit(fn, p) for p in params]
         try:
             return [f.result() for f in futs]
         except BaseException:

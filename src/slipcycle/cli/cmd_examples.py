@@ -1,0 +1,57 @@
+"""``slipcycle examples [--copy DIR]``: the example cases shipped with slipcycle.
+
+Without options, lists every shipped case file with its first comment line; ``--copy DIR``
+copies them (or only the ``NAME``s given) into DIR to edit and run, e.g.
+``slipcycle examples --copy cases && slipcycle run cases/halfspace_sphere.toml --out r``.
+``--path NAME`` prints where the installed file of one example is.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("examples", help="list the shipped example cases, or copy them to edit",
+                       description=__doc__,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("names", nargs="*", metavar="NAME", help="examples to copy (default: all)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--copy", type=Path, default=None, metavar="DIR",
+                   help="copy the example case files into DIR")
+    g.add_argument("--path", action="store_true",
+                   help="print the installed path of each NAME")
+    p.add_argument("--force", action="store_true",
+                   help="with --copy: replace files of the same name in DIR")
+    p.set_defaults(execute=execute, writes_results=False)
+
+
+def execute(args: argparse.Namespace) -> int:
+    from slipcycle.errors import InputError as CaseError
+    from slipcycle.examples import copy_examples, example_path, example_summary, list_examples
+
+    names = [n.removesuffix(".toml") for n in args.names]
+    unknown = [n for n in names if n not in list_examples()]
+    if unknown:
+        raise CaseError(unknown[0], "is not a shipped example; 'slipcycle examples' lists "
+                        "them")
+    if args.copy is not None:
+        try:
+            written = copy_examples(args.copy, names or None, overwrite=args.force)
+        except FileExistsError as exc:
+            raise CaseError("--copy", str(exc)) from None
+        except OSError as exc:
+            raise CaseError(str(args.copy), f"cannot write: {exc.strerror or exc}") from None
+        if not args.quiet:
+            print(f"{len(written)} example case files copied to {args.copy}/")
+        return 0
+    if args.path:
+        for name in names or list_examples():
+            print(example_path(name))
+        return 0
+    if not args.quiet:
+        width = max(len(n) for n in list_examples())
+        for name in names or list_examples():
+            print(f"{name:<{width}}  {example_summary(name)}")
+    return 0
