@@ -8,8 +8,10 @@ Barber 2008; Andersson, Barber & Ahn 2013). This module maps it:
   dissipation, slipping nodes, memory erased), using the compiled contact-only kernel of
   :mod:`~slipcycle.discrete.fastcycle` where it applies and the general solver
   :func:`~slipcycle.discrete.steady.simulate` otherwise (assembly protocols, separation);
-- :func:`basin_row` / :func:`basin_grid_axes` — N = 2 maps over a (v1, v2) grid of initial
-  slip states at θ = 0, one grid row per sweep cell (:mod:`slipcycle.sweep`);
+- :func:`basin_row` / :func:`basin_block_task` — N = 2 maps over a (v1, v2) grid of initial
+  slip states at θ = 0, a block of grid rows per sweep cell (:mod:`slipcycle.sweep`): every
+  start of a block goes to the compiled kernel in one call (its threads share them out) and
+  to the store in one write per output;
 - :func:`initial_conditions_task` — any N: a list of protocols or random admissible states;
 - :func:`box_counting_dimension` — dimension of the boundaries between classes (fractal
   basin boundaries near unstable orbits);
@@ -56,7 +58,8 @@ from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
 __all__ = ["run_record", "run_records", "basin_row", "admissible_box",
            "box_counting_dimension", "class_code", "load_discrete_case",
-           "basin_row_task", "lam_start_task", "protocol_task", "random_task",
+           "basin_row_task", "basin_block_task", "grid_blocks", "lam_start_task",
+           "protocol_task", "random_task",
            "read_protocols", "parse_range", "basins_study", "BasinsResult", "AnalysisStatus",
            "SUMMARY_UNITS", "SUMMARY_FLAGS"]
 
@@ -196,6 +199,61 @@ def basin_row_task(params: dict, case_text: str, case_path, v1: tuple, v2: tuple
     load = dc.load if lam is None else dc.load.with_lam(lam)
     settings = {**_run_settings(dc), **run}
     return basin_row(dc.system, load, np.asarray(v1), v2[int(params["row"])], **settings)
+
+
+#: starts per sweep cell of a grid map: enough to keep the kernel's threads busy and the
+#: store's writes few (one Zarr write per output and cell), few enough to resume finely
+BLOCK_STARTS = 4096
+
+
+def grid_blocks(grid: int, starts_per_block: int = BLOCK_STARTS) -> tuple[int, int]:
+    """(blocks, rows per block) of a ``grid`` × ``grid`` map: rows of about
+    ``starts_per_block`` starts per block, and at least two blocks (a map stopped after one
+    cell is never complete)."""
+    rows = max(1, min(-(-grid // 2), starts_per_block // max(grid, 1)))
+    return -(-grid // rows), rows
+
+
+def basin_block_task(params: dict, case_text: str, case_path, v1: tuple, v2: tuple,
+                     rows: int, lam: float | None = None, threads: int | None = None,
+                     **run) -> dict:
+    """Sweep task: rows ``block·rows`` … ``block·rows + rows − 1`` of a basin map.
+
+    All ``rows`` × len(v1) starts run in one call of :func:`run_records`. Rows past the
+    last v2 (the last block's padding) are not run: they hold the record of an
+    inadmissible start and are dropped when the map is read.
+
+    Returns
+    -------
+    dict of arrays with leading dimensions (rows, len(v1)) (see :func:`run_records`).
+    """
+    if threads:
+        import numba
+
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    dc = load_discrete_case(case_text, case_path)
+    load = dc.load if lam is None else dc.load.with_lam(lam)
+    settings = {**_run_settings(dc), **run}
+    n1, n = len(v1), dc.system.n_nodes
+    first = int(params["block"]) * rows
+    y = np.asarray(v2[first:first + rows], float)
+    V0 = np.column_stack([np.tile(np.asarray(v1, float), y.size), np.repeat(y, n1)])
+    # the kernel's threads split the starts into contiguous halves; inadmissible starts
+    # (instant) cluster in the corners of the box, so the starts go in a scattered order
+    order = np.random.default_rng(0).permutation(V0.shape[0])
+    shuffled = run_records(dc.system, load, V0[order], **settings)
+    out = {}
+    for k, v in shuffled.items():
+        out[k] = np.empty_like(v)
+        out[k][order] = v
+    pad = _empty_record(n, INADMISSIBLE)
+    block = {}
+    for k, v in out.items():
+        full = np.empty((rows * n1,) + v.shape[1:], v.dtype)
+        full[:v.shape[0]] = v
+        full[v.shape[0]:] = pad[k]
+        block[k] = full.reshape((rows, n1) + v.shape[1:])
+    return block
 
 
 def _run_settings(dc) -> dict:
@@ -478,9 +536,11 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
         v2 = np.linspace(box[1, 0], box[1, 1], grid)
         threads = None if (workers_opt in (None, 1) and scheduler is None) else 1
         workers = 1 if workers_opt is None and scheduler is None else workers_opt
-        fn = partial(basin_row_task, case_text=case.text, case_path=cpath,
-                     v1=tuple(v1.tolist()), v2=tuple(v2.tolist()), lam=lam, threads=threads)
-        axes = [Axis("row", tuple(range(grid)))]
+        blocks, rows = grid_blocks(grid)
+        fn = partial(basin_block_task, case_text=case.text, case_path=cpath,
+                     v1=tuple(v1.tolist()), v2=tuple(v2.tolist()), rows=rows, lam=lam,
+                     threads=threads)
+        axes = [Axis("block", tuple(range(blocks)))]
         desc = {"mode": "grid", "lam": lam, "v1": v1.tolist(), "v2": v2.tolist()}
     elif mode == "random":
         if random < 1:
@@ -517,6 +577,8 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
     if not done.all():
         return AnalysisStatus(None, int(done.sum()), int(done.size))
     data = store.read()
+    if mode == "grid":  # (block, row, v1, ...) -> (v2, v1, ...), padding rows dropped
+        data = {k: v.reshape((-1,) + v.shape[2:])[:grid] for k, v in data.items()}
     region = safe_region(dc.system, dc.load)
     l2 = lambda2(region)[0]
     l1 = lambda1(region, l2)["lambda1"]

@@ -10,6 +10,8 @@ measured topography into P(U) by a boundary-element solver and :mod:`~.roughness
 asks which of its wavelengths matter.
 """
 
+import importlib
+
 from slipcycle.halfspace.bed import SliderBed, make_bed
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.history import HistoryResult, run_history
@@ -24,15 +26,11 @@ from slipcycle.halfspace.profiles import (
     Tabulated,
     sphere,
 )
-from slipcycle.halfspace.topography import (
-    BEMLaw,
-    ExponentialFit,
-    SurfaceMap,
-    TopographySource,
-    bem_normal_law,
-    fit_exponential,
-    read_surface,
-)
+
+# the topography bridge needs xarray and (optionally) SurfaceTopography: loaded on first use
+_LAZY = {name: "topography" for name in (
+    "BEMLaw", "ExponentialFit", "SurfaceMap", "TopographySource", "bem_normal_law",
+    "fit_exponential", "read_surface")}
 
 __all__ = [
     "ContactElasticity", "Cylinder2D", "FlatPunch", "HalfspaceModel", "HistoryResult",
@@ -41,3 +39,15 @@ __all__ = [
     "BEMLaw", "ExponentialFit", "SurfaceMap", "TopographySource", "bem_normal_law",
     "fit_exponential", "read_surface",
 ]
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f"slipcycle.halfspace.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'slipcycle.halfspace' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

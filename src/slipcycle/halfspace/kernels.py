@@ -28,7 +28,7 @@ from slipcycle.kernels.jenkins import (
     solve_tangential_force,
 )
 
-__all__ = ["drive", "drive_from", "solve_tangential_force", "STATUS_OK", "SLIP_TOL"]
+__all__ = ["drive", "drive_from", "drive_with", "solve_tangential_force", "STATUS_OK", "SLIP_TOL"]
 
 STATUS_OK = -1
 #: relative overshoot of a slider's limit below which a step does not count it as slipping
@@ -92,8 +92,20 @@ def drive_from(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
         Total number of sweeps over the sliders (for performance accounting).
     """
     n = t.size
-    cap = np.empty(n)
-    ke = np.empty(n)
+    # reciprocal stiffnesses once per call: the bracket needs (±c − t)/κ for every slider
+    # at every step, and a division costs several multiplications
+    return drive_with(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_control,
+                      V0, U0, rec_index, rec_t, rec_z, V_out, Q_out, first_slip_out,
+                      np.empty(n), np.empty(n), 1.0 / kt)
+
+
+@njit(cache=True)
+def drive_with(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_control, V0,
+               U0, rec_index, rec_t, rec_z, V_out, Q_out, first_slip_out, cap, ke, inv_kt):
+    """:func:`drive_from` with its work arrays given: ``cap`` and ``ke`` (n,) (overwritten)
+    and ``inv_kt`` = 1/kt (n,), for callers that drive the same bed many times in short
+    pieces (the Ŵ map) and would otherwise allocate them every time."""
+    n = t.size
     V = V0
     U_old = U0
     r = 0
@@ -107,6 +119,10 @@ def drive_from(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
         s0 = 0.0
         lo = 0.0
         hi = 0.0
+        # nearest breakpoints of Σ clip(t + κ ΔV, ±c) on either side of ΔV = 0: between
+        # them the sum is linear with slope s0, so one Newton step from 0 is the root
+        below = -np.inf
+        above = np.inf
         for i in range(n):
             gap = U - level[i]
             c = friction * kn[i] * gap if gap > 0.0 else 0.0
@@ -117,8 +133,10 @@ def drive_from(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
             old_gap = U_old - level[i]
             if gap > 0.0 and old_gap < 0.0:
                 ke[i] = kt[i] * gap / (gap - old_gap)
+                inv = 1.0 / ke[i]
             else:
                 ke[i] = kt[i]
+                inv = inv_kt[i]
             ti = t[i]
             if ti >= c:
                 q0 += c
@@ -127,8 +145,20 @@ def drive_from(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
             else:
                 q0 += ti
                 s0 += ke[i]
-            lo = min(lo, (-c - ti) / ke[i])
-            hi = max(hi, (c - ti) / ke[i])
+            b_lo = (-c - ti) * inv
+            b_hi = (c - ti) * inv
+            lo = min(lo, b_lo)
+            hi = max(hi, b_hi)
+            if c > 0.0:  # a slider out of contact carries nothing: no breakpoint
+                # reaching +c ahead, or leaving +c behind (0: at the limit now)
+                if b_hi > 0.0:
+                    above = min(above, b_hi)
+                else:
+                    below = max(below, b_hi)
+                if b_lo < 0.0:
+                    below = max(below, b_lo)
+                else:
+                    above = min(above, b_lo)
         U_old = U
         passes += 1
         if force_control:
@@ -136,8 +166,15 @@ def drive_from(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
             if target != 0.0 and abs(target) >= qmax * (1.0 - 1e-12):
                 return k, passes
             if qmax > 0.0:
-                dv, p = _newton(t, ke, cap, target, 0.0, q0 - target, s0, lo, hi, qmax)
-                passes += p
+                # the first step of _newton, taken here when it provably lands on the root
+                # (no breakpoint between 0 and it): saves the sweep that would confirm it
+                r0 = q0 - target
+                dv = 0.0 - r0 / s0 if s0 > 0.0 else np.nan
+                if abs(r0) <= 1e-13 * (qmax + abs(target)):
+                    dv = 0.0
+                elif not (below < dv < above):
+                    dv, p = _newton(t, ke, cap, target, 0.0, r0, s0, lo, hi, qmax)
+                    passes += p
             else:
                 dv = 0.0  # nothing in contact and no load: nothing moves
         else:

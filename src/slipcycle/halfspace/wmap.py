@@ -9,7 +9,22 @@ theorem; tests check it against a third). Each point gets its own bed, built by 
 compiled functions as ``slipcycle run`` (:func:`~slipcycle.halfspace.bed.rough_unit_bed`,
 :func:`~slipcycle.halfspace.bed.lumping_load`): sliders that stay below every stick load of
 the history are lumped, the rest equally spaced in load. Grid points run in parallel
-threads (Numba ``prange``) without Python overhead per point.
+threads (Numba ``prange``, in a scattered order so that both threads get their share of
+the cheap gross-slip points) without Python overhead per point.
+
+Work that cannot change a value is not done (``reference=True`` does all of it, and tests
+compare the two to round-off):
+
+- a path whose samples certainly leave the friction cone (|Q| ≥ fP with a margin of 1e-9
+  over the bed's round-off) is gross slip without driving the bed;
+- the preload (Q = 0 on an unloaded bed) moves no slider and is not driven;
+- the unlumped bed of each P̂1 and its approach path are built once, not per point;
+- the second cycle stops at the first chunk end (every :data:`CHUNK` steps) where every
+  slider force equals that of the first cycle at the same step to :data:`STATE_MATCH`:
+  the bed's step depends only on its state and the loads, so from there the second cycle
+  repeats the first (its dissipation is taken from it). In practice the two cycles meet
+  after about half a cycle, at the first load extreme that wipes the memory of the ramp
+  (Masing behaviour of the Jenkins bed).
 """
 
 from __future__ import annotations
@@ -18,16 +33,17 @@ import numpy as np
 from numba import njit, prange
 
 from slipcycle.halfspace.bed import UNLUMPED_FRACTION, lumping_load, rough_unit_bed
-from slipcycle.halfspace.kernels import drive_from
+from slipcycle.halfspace.kernels import drive_from, drive_with
 
 __all__ = ["w_hat_map", "w_hat_point"]
 
 
 @njit(cache=True)
-def _path(P1, Q1, phi, level, kn, steps, asm_steps, cycles):
-    """Approach and tangential load at every step: preload, tangential ramp, cycles."""
+def _approach_path(P1, level, kn, steps, asm_steps, cycles):
+    """Approach U at every step of preload, tangential ramp and cycles: the exact inverse of
+    the bed's piecewise-linear P(U) at P = P0(1 + P̂1) k/n (preload), P0(1 + P̂1) (ramp) and
+    P0(1 + P̂1 cos θ) (cycles), P0 = 1."""
     P_start = 1.0 + P1
-    Q_start = Q1 * np.cos(-phi)
     K = np.cumsum(kn)
     M = np.cumsum(kn * level)
     P_knots = np.empty(level.size)
@@ -36,62 +52,197 @@ def _path(P1, Q1, phi, level, kn, steps, asm_steps, cycles):
         P_knots[j] = K[j - 1] * level[j] - M[j - 1]
     total = 2 * asm_steps + cycles * steps
     U = np.empty(total)
-    T = np.empty(total)
     for k in range(total):
         if k < asm_steps:
             P = P_start * (k + 1) / asm_steps
-            Q = 0.0
         elif k < 2 * asm_steps:
             P = P_start
-            Q = Q_start * (k - asm_steps + 1) / asm_steps
         else:
             th = 2.0 * np.pi * (k - 2 * asm_steps + 1) / steps
             P = 1.0 + P1 * np.cos(th)
-            Q = Q1 * np.cos(th - phi)
-        # exact inverse of the bed's piecewise-linear P(U)
         j = max(np.searchsorted(P_knots, P, side="right") - 1, 0)
         U[k] = (P + M[j]) / K[j]
-        T[k] = Q
-    return U, T
+    return U
 
 
 @njit(cache=True)
-def _run_point(P1, Q1, phi, P_lo, n_sliders, steps, asm_steps, cycles):
-    """(Ŵ of the last cycle or nan at gross slip, lowest slipping slider index)."""
-    P_max = (1.0 + abs(P1)) * (1 + 1e-9)    # the largest load, θ = 0
-    level, kn, _ = rough_unit_bed(P_lo, P_max, n_sliders)
+def _tangential_path(Q1, phi, steps, asm_steps, cycles):
+    """Tangential load Q at every step: 0 (preload), a ramp to Q̂1 cos φ, then Q̂1 cos(θ − φ)."""
+    Q_start = Q1 * np.cos(-phi)
+    total = 2 * asm_steps + cycles * steps
+    T = np.empty(total)
+    for k in range(total):
+        if k < asm_steps:
+            T[k] = 0.0
+        elif k < 2 * asm_steps:
+            T[k] = Q_start * (k - asm_steps + 1) / asm_steps
+        else:
+            th = 2.0 * np.pi * (k - 2 * asm_steps + 1) / steps
+            T[k] = Q1 * np.cos(th - phi)
+    return T
+
+
+@njit(cache=True)
+def _path(P1, Q1, phi, level, kn, steps, asm_steps, cycles):
+    """Approach and tangential load at every step: preload, tangential ramp, cycles."""
+    return (_approach_path(P1, level, kn, steps, asm_steps, cycles),
+            _tangential_path(Q1, phi, steps, asm_steps, cycles))
+
+
+@njit(cache=True)
+def _gross_slip_verdict(P1, Q1, phi, steps, asm_steps):
+    """1 if the sampled path certainly leaves the friction cone, 0 if it certainly stays
+    inside, −1 when it grazes the cone too closely to tell without the bed.
+
+    The bed is exact in P(U) at every sample, so its total limit there is f P up to
+    round-off (relative 1e-14 at most, far below the 1e-9 margin); the driver reports gross
+    slip at the first sample with |Q| ≥ (1 − 1e-12) f P (f = P0 = 1 here).
+    """
+    verdict = 0
+    for k in range(asm_steps + steps):
+        if k < asm_steps:
+            P = 1.0 + P1
+            Q = Q1 * np.cos(-phi) * (k + 1) / asm_steps
+        else:
+            th = 2.0 * np.pi * (k - asm_steps + 1) / steps
+            P = 1.0 + P1 * np.cos(th)
+            Q = Q1 * np.cos(th - phi)
+        edge = P * (1.0 - 1e-12)
+        if abs(Q) >= edge * (1.0 + 1e-9):
+            return 1
+        if abs(Q) >= edge * (1.0 - 1e-9):
+            verdict = -1
+    return verdict
+
+
+@njit(cache=True)
+def _trapezoid(Q, V, s0, total):
+    """∮Q dV over the steps s0+1 .. total−1 (trapezoidal), in the order the reference sums."""
+    W = 0.0
+    for k in range(s0 + 1, total):
+        W += 0.5 * (Q[k] + Q[k - 1]) * (V[k] - V[k - 1])
+    return W
+
+
+#: steps per chunk of the second cycle between comparisons with the first
+CHUNK = 8
+_NO_RECORD = np.empty(0, np.int64)
+#: two slider states agree when no force differs by more than this times the largest
+STATE_MATCH = 1e-13
+
+
+@njit(cache=True)
+def _drive_chunk(t, z, d, slip, level, kn, kt, U, T, lo, hi, V_out, Q_out, first, work):
+    """Drive the bed over the steps lo .. hi−1 (from the state after step lo − 1), only the
+    sliders that touch somewhere in them; returns the driver's status.
+
+    Levels ascend, so the sliders above the largest approach of the chunk form a suffix;
+    they carry no force (t = 0, limit 0) and add exact zeros to every sum of the driver, so
+    leaving them out changes no value (only their base slip z, which the map never reads).
+    """
+    U_top = U[lo - 1]
+    for k in range(lo, hi):
+        U_top = max(U_top, U[k])
+    m = max(np.searchsorted(level, U_top, side="left"), 1)
+    none = work[:0]
+    status, _ = drive_with(t[:m], z[:m], d[:m], slip[:m], level[:m], kn[:m], kt[:m], 1.0,
+                           U[lo:hi], T[lo:hi], True, V_out[lo - 1], U[lo - 1],
+                           _NO_RECORD, none, none, V_out[lo:hi], Q_out[lo:hi],
+                           first[lo:hi], work[0, :m], work[1, :m], work[2, :m])
+    n = level.size
+    for k in range(lo, hi):
+        if first[k] >= m:
+            first[k] = n          # no slip among the driven sliders: none at all
+    return status
+
+
+@njit(cache=True)
+def _drive_point(level, kn, U, T, steps, asm_steps, cycles, reference):
+    """(Ŵ of the last cycle or nan at gross slip, lowest slipping slider index).
+
+    ``reference``: every step of the path on every slider, as the original algorithm.
+    Otherwise the preload is skipped (Q = 0 on an unloaded bed: no slider moves, an exact
+    no-op), the path is driven in chunks of :data:`CHUNK` steps on the sliders in contact
+    (:func:`_drive_chunk`) and, with two cycles, the second one stops at the first chunk
+    end where the slider forces equal those of the first cycle at the same step: from a
+    common state the same loads give the same steps, so the rest of the second cycle is
+    the rest of the first (forced-periodic Jenkins elements, Melan's theorem for the
+    uncoupled bed).
+    """
     kt = kn.copy()
     n = level.size
-    U, T = _path(P1, Q1, phi, level, kn, steps, asm_steps, cycles)
     total = U.size
     t = np.zeros(n)
     z = np.zeros(n)
     d = np.zeros(n)
     slip = np.zeros(n)
-    V_out = np.empty(total)
-    Q_out = np.empty(total)
-    first = np.empty(total, np.int64)
-    idx = np.empty(0, np.int64)
-    rec = np.empty((0, n))
-    status, _ = drive_from(t, z, d, slip, level, kn, kt, 1.0, U, T, True, 0.0, level[0], idx,
-                           rec, rec, V_out, Q_out, first)
-    if status >= 0:
+    V_out = np.zeros(total)
+    Q_out = np.zeros(total)
+    first = np.full(total, n, np.int64)
+    if reference or cycles != 2:
+        idx = np.empty(0, np.int64)
+        none = np.empty((0, n))
+        status, _ = drive_from(t, z, d, slip, level, kn, kt, 1.0, U, T, True, 0.0, level[0],
+                               idx, none, none, V_out, Q_out, first)
+        if status >= 0:
+            return np.nan, 0
+        return _trapezoid(Q_out, V_out, total - steps - 1, total), first.min()
+    a = asm_steps           # preload: a no-op (state stays zero, V = Q = 0, no slip)
+    c1 = 2 * asm_steps      # first step of cycle 1
+    c2 = c1 + steps         # first step of cycle 2
+    work = np.empty((3, n))  # the driver's limits, step stiffnesses and 1/κ
+    work[2] = 1.0 / kt
+    if _drive_chunk(t, z, d, slip, level, kn, kt, U, T, a, c1, V_out, Q_out, first,
+                    work) >= 0:
         return np.nan, 0
-    s0 = total - steps - 1
-    W = 0.0
-    for k in range(s0 + 1, total):
-        W += 0.5 * (Q_out[k] + Q_out[k - 1]) * (V_out[k] - V_out[k - 1])
-    return W, first.min()
+    n_chunks = (steps + CHUNK - 1) // CHUNK
+    rec_t = np.empty((n_chunks, n))       # slider forces at the chunk ends of cycle 1
+    for j in range(n_chunks):
+        lo = c1 + j * CHUNK
+        hi = min(lo + CHUNK, c2)
+        if _drive_chunk(t, z, d, slip, level, kn, kt, U, T, lo, hi, V_out, Q_out,
+                        first, work) >= 0:
+            return np.nan, 0
+        rec_t[j] = t
+    stop = total
+    for j in range(n_chunks):
+        lo = c2 + j * CHUNK
+        hi = min(lo + CHUNK, total)
+        if _drive_chunk(t, z, d, slip, level, kn, kt, U, T, lo, hi, V_out, Q_out,
+                        first, work) >= 0:
+            return np.nan, 0
+        if hi >= total:
+            break
+        scale = 0.0
+        gap = 0.0
+        for i in range(n):
+            scale = max(scale, abs(rec_t[j, i]))
+            gap = max(gap, abs(t[i] - rec_t[j, i]))
+        if gap <= STATE_MATCH * scale:
+            stop = hi
+            break
+    # the rest of cycle 2 repeats cycle 1: its forces, and its displacements shifted by
+    # the net displacement of cycle 1 (Q, ΔV and the lowest slipping slider per step)
+    shift = V_out[stop - 1] - V_out[stop - 1 - steps]
+    for k in range(stop, total):
+        Q_out[k] = Q_out[k - steps]
+        V_out[k] = V_out[k - steps] + shift
+        first[k] = first[k - steps]
+    return _trapezoid(Q_out, V_out, total - steps - 1, total), first.min()
 
 
 @njit(cache=True)
-def _one_point(P1, Q1, phi, n_sliders, steps, asm_steps, cycles):
-    """Ŵ of the last of ``cycles`` cycles; nan when |Q| reaches fP somewhere (gross slip).
+def _run_point(P1, Q1, phi, P_lo, n_sliders, steps, asm_steps, cycles, reference):
+    """(Ŵ of the last cycle or nan at gross slip, lowest slipping slider index)."""
+    P_max = (1.0 + abs(P1)) * (1 + 1e-9)    # the largest load, θ = 0
+    level, kn, _ = rough_unit_bed(P_lo, P_max, n_sliders)
+    U, T = _path(P1, Q1, phi, level, kn, steps, asm_steps, cycles)
+    return _drive_point(level, kn, U, T, steps, asm_steps, cycles, reference)
 
-    The bed is the one :meth:`HalfspaceModel.bed` builds for the same history: sliders
-    below :func:`~slipcycle.halfspace.bed.lumping_load` are lumped, and the point is rerun
-    on an unlumped bed should slip reach them.
-    """
+
+@njit(cache=True)
+def _lumping(P1, Q1, phi, steps):
+    """(history-derived lumping load, fallback load) of a point (see :func:`_one_point`)."""
     # extremes of the loads the history visits: the start state and the cycle's samples
     # (the path is linear between them), as HalfspaceModel.lumping_load takes them
     P_min = P_max = 1.0 + P1
@@ -102,29 +253,83 @@ def _one_point(P1, Q1, phi, n_sliders, steps, asm_steps, cycles):
         Q = Q1 * np.cos(th - phi)
         P_min, P_max = min(P_min, P), max(P_max, P)
         Q_lo, Q_hi = min(Q_lo, Q), max(Q_hi, Q)
-    P_lo = lumping_load(P_min, P_max, Q_lo, Q_hi, 1.0)
-    fallback = UNLUMPED_FRACTION * P_max
+    return lumping_load(P_min, P_max, Q_lo, Q_hi, 1.0), UNLUMPED_FRACTION * P_max
+
+
+@njit(cache=True)
+def _one_point(P1, Q1, phi, n_sliders, steps, asm_steps, cycles, reference=True):
+    """Ŵ of the last of ``cycles`` cycles; nan when |Q| reaches fP somewhere (gross slip).
+
+    The bed is the one :meth:`HalfspaceModel.bed` builds for the same history: sliders
+    below :func:`~slipcycle.halfspace.bed.lumping_load` are lumped, and the point is rerun
+    on an unlumped bed should slip reach them.
+    """
+    P_lo, fallback = _lumping(P1, Q1, phi, steps)
     W, first = _run_point(P1, Q1, phi, P_lo if P_lo > 0.0 else fallback, n_sliders, steps,
-                          asm_steps, cycles)
+                          asm_steps, cycles, reference)
     if P_lo > 0.0 and first <= 1 and not np.isnan(W):
-        W, first = _run_point(P1, Q1, phi, fallback, n_sliders, steps, asm_steps, cycles)
+        W, first = _run_point(P1, Q1, phi, fallback, n_sliders, steps, asm_steps, cycles,
+                              reference)
+    return W
+
+
+@njit(cache=True)
+def _fast_point(P1, Q1, phi, n_sliders, steps, asm_steps, cycles, level_fb, kn_fb, U_fb):
+    """:func:`_one_point` without the work that cannot change its value: a path that
+    certainly reaches gross slip is not driven, the unlumped bed of this P̂1 and its
+    approach path come precomputed (``level_fb``, ``kn_fb``, ``U_fb``), and the preload
+    and the repeating end of the second cycle are not driven (:func:`_drive_point`)."""
+    if _gross_slip_verdict(P1, Q1, phi, steps, asm_steps) == 1:
+        return np.nan
+    P_lo, _ = _lumping(P1, Q1, phi, steps)
+    T = _tangential_path(Q1, phi, steps, asm_steps, cycles)
+    if P_lo > 0.0:
+        W, first = _run_point(P1, Q1, phi, P_lo, n_sliders, steps, asm_steps, cycles, False)
+        if first > 1 or np.isnan(W):
+            return W
+    W, _ = _drive_point(level_fb, kn_fb, U_fb, T, steps, asm_steps, cycles, False)
     return W
 
 
 @njit(parallel=True, cache=True)
-def _grid(P1s, Q1s, phis, n_sliders, steps, asm_steps, cycles):
+def _grid(P1s, Q1s, phis, n_sliders, steps, asm_steps, cycles, order, reference):
     n1, n2, n3 = P1s.size, Q1s.size, phis.size
     out = np.empty(n1 * n2 * n3)
-    for flat in prange(n1 * n2 * n3):
+    if reference:
+        for flat in prange(n1 * n2 * n3):
+            i = flat // (n2 * n3)
+            j = (flat // n3) % n2
+            k = flat % n3
+            out[flat] = _one_point(P1s[i], Q1s[j], phis[k], n_sliders, steps, asm_steps,
+                                   cycles, True)
+        return out.reshape((n1, n2, n3))
+    # the unlumped bed of each P̂1 (the rough law's fallback) and its approach path
+    total = 2 * asm_steps + cycles * steps
+    level_fb = np.empty((n1, n_sliders + 1))
+    kn_fb = np.empty((n1, n_sliders + 1))
+    U_fb = np.empty((n1, total))
+    for i in prange(n1):
+        _, fallback = _lumping(P1s[i], 0.0, 0.0, steps)
+        P_max = (1.0 + abs(P1s[i])) * (1 + 1e-9)
+        level, kn, _ = rough_unit_bed(fallback, P_max, n_sliders)
+        level_fb[i] = level
+        kn_fb[i] = kn
+        U_fb[i] = _approach_path(P1s[i], level, kn, steps, asm_steps, cycles)
+    # points in a scattered order, so that every thread gets its share of the cheap
+    # gross-slip points (they cluster at large P̂1 and Q̂1)
+    for m in prange(n1 * n2 * n3):
+        flat = order[m]
         i = flat // (n2 * n3)
         j = (flat // n3) % n2
         k = flat % n3
-        out[flat] = _one_point(P1s[i], Q1s[j], phis[k], n_sliders, steps, asm_steps, cycles)
+        out[flat] = _fast_point(P1s[i], Q1s[j], phis[k], n_sliders, steps, asm_steps, cycles,
+                                level_fb[i], kn_fb[i], U_fb[i])
     return out.reshape((n1, n2, n3))
 
 
 def w_hat_map(P1_hat, Q1_hat, phase, *, steps_per_cycle: int = 200, n_sliders: int = 100,
-              cycles: int = 2, assembly_steps: int = 20) -> np.ndarray:
+              cycles: int = 2, assembly_steps: int = 20, reference: bool = False
+              ) -> np.ndarray:
     """Ŵ on the grid P1_hat × Q1_hat × phase.
 
     Parameters
@@ -133,6 +338,10 @@ def w_hat_map(P1_hat, Q1_hat, phase, *, steps_per_cycle: int = 200, n_sliders: i
         P̂1 = P1/P0 in [0, 1), Q̂1 = Q1/(f P0) ≥ 0, φ in rad.
     steps_per_cycle, n_sliders, cycles, assembly_steps : int
         Discretisation (see module docstring; the convergence tests state the error).
+    reference : bool
+        Drive every step of every point (the original algorithm; the default skips only
+        work that cannot change a value, see module docstring, and agrees with it to
+        round-off).
 
     Returns
     -------
@@ -146,7 +355,9 @@ def w_hat_map(P1_hat, Q1_hat, phase, *, steps_per_cycle: int = 200, n_sliders: i
         raise ValueError("P1_hat must lie in [0, 1) (the contact must stay closed)")
     if np.any(Q1 < 0):
         raise ValueError("Q1_hat must be >= 0")
-    return _grid(P1, Q1, ph, n_sliders, steps_per_cycle, assembly_steps, cycles)
+    order = np.random.default_rng(0).permutation(P1.size * Q1.size * ph.size)
+    return _grid(P1, Q1, ph, int(n_sliders), int(steps_per_cycle), int(assembly_steps),
+                 int(cycles), order, bool(reference))
 
 
 def w_hat_point(P1_hat: float, Q1_hat: float, phase: float, **kw) -> float:

@@ -197,18 +197,23 @@ def apply_increment(t, k, k_step, cap, dv, d, z, slip, slip_tol):
         c = cap[i]
         if x > c or x < -c:
             tn = c if x > c else -c
-            dz = dv * k_step[i] / k[i] - (tn - told) / k[i]
+            back = (tn - told) / k[i]
+            dz = dv * k_step[i] / k[i] - back
             if c > 0.0 and abs(x) - c > slip_tol * c:
                 n_slip += 1
                 if i < first:
                     first = i
+            d[i] += 0.5 * (told + tn) * (dv - back)
+            z[i] += dz
+            if c > 0.0:
+                slip[i] += abs(dz)
         else:
             tn = x
-            dz = 0.0
-        d[i] += 0.5 * (told + tn) * (dv - (tn - told) / k[i])
-        z[i] += dz
-        if c > 0.0:
-            slip[i] += abs(dz)
+            # a stuck element that was in contact over the whole step takes the whole ΔV
+            # elastically: its exact slip and dissipation are 0 (the general formula gives
+            # 0 up to round-off, at the price of a division per element and step)
+            if k_step[i] != k[i]:
+                d[i] += 0.5 * (told + tn) * (dv - (tn - told) / k[i])
         t[i] = tn
         q += tn
     return q, n_slip, first
