@@ -51,6 +51,7 @@ one-line ``repr`` of its headline numbers and a small HTML table.
 
 from __future__ import annotations
 
+import functools
 import html
 import math
 from dataclasses import dataclass
@@ -145,8 +146,28 @@ class _Contract:
     """The output methods shared by run results and analysis results.
 
     A subclass implements :meth:`summary`, :meth:`to_dataset`, :meth:`figures` and
-    :attr:`flags`; :meth:`to_outputs` packs them as ``RunOutputs``.
+    :attr:`flags`; :meth:`to_outputs` packs them as ``RunOutputs``. The Dataset a subclass
+    builds is completed to the CF conventions here (coordinate variables for every
+    dimension, ``long_name`` and ``units`` from the summary's units, flag attributes:
+    :func:`slipcycle.io.metadata.cf_complete`), so ``to_dataset()`` in Python is what
+    ``result.nc`` holds.
     """
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        build = cls.__dict__.get("to_dataset")
+        if build is None or getattr(build, "_cf_completed", False):
+            return
+
+        @functools.wraps(build)
+        def to_dataset(self, *args, **kw):
+            from slipcycle.io.metadata import cf_complete
+
+            ds = build(self, *args, **kw)
+            return cf_complete(ds, self.summary().get("units"), dict(self.flags))
+
+        to_dataset._cf_completed = True
+        cls.to_dataset = to_dataset
 
     @property
     def flags(self) -> dict[str, tuple[str, ...]]:
