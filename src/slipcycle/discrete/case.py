@@ -52,19 +52,15 @@ def _matrices(sec: Section) -> tuple[dict, dict]:
             if sec.has(k):
                 raise sec.error(k, "give either stiffness_file or A, B, C inline, not both")
         path = sec.path("stiffness_file")
-        order = sec.string("dof_order", "tangential_first",
-                           choices=("tangential_first", "interleaved"))
         from slipcycle.discrete.sizes import check_memory, system_bytes
-        from slipcycle.io.matrices import read_stiffness, stiffness_nodes
+        from slipcycle.io.matrices import read_case_stiffness, stiffness_nodes
 
         n_file = stiffness_nodes(path)
         if n_file is not None:
             check_memory(sec.key("stiffness_file"), system_bytes(n_file),
                          f"{n_file} contact nodes")
-        try:
-            mats = read_stiffness(path, order)
-        except (ValueError, OSError, KeyError) as exc:
-            raise sec.error("stiffness_file", f"cannot read reduced stiffness: {exc}") from None
+        # every format (npz, mtx, Abaqus, CalculiX, HB, .mat, DMIG), 2-D: one tangent
+        mats = read_case_stiffness(sec, path, tangential_dims=1).to_arrays()
         keys = {k: sec.key("stiffness_file") + f" (matrix {k})" for k in ("A", "B", "C", "K")}
         return mats, keys
     A = sec.array("A", shape=(None, None))
@@ -261,10 +257,14 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     load = DiscreteLoad(p_load, q_load, tuple(cases))
 
     rn = case.section("run", required=False)
+    # `steady_tol`, as in every model; `tolerance` is its older name in discrete cases
+    if rn.has("tolerance") and rn.has("steady_tol"):
+        raise rn.error("tolerance", "give steady_tol (or its older name tolerance), not both")
     run = {
         "cycles": rn.int("cycles", 40, ge=1),
         "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1),
-        "tol": rn.float("tolerance", 1e-8, gt=0.0, lt=1.0),
+        "tol": rn.float("tolerance" if rn.has("tolerance") else "steady_tol", 1e-8,
+                        gt=0.0, lt=1.0),
         "min_cycles": rn.int("min_cycles", 1, ge=1),
     }
     case.finish()
@@ -427,7 +427,8 @@ def discrete_case(system: FrictionalSystem, load, run: Mapping | None = None, *,
     load : DiscreteLoad or callable
         ``load(theta) -> (n, 2N)`` array of [q^w, p^w] (N) with ``cycle_samples``.
     run : mapping, optional
-        ``cycles``, ``steps_per_cycle``, ``tol`` (or ``tolerance``), ``min_cycles``;
+        ``cycles``, ``steps_per_cycle``, ``tol`` (or ``steady_tol``, ``tolerance``),
+        ``min_cycles``;
         :data:`RUN_DEFAULTS` for those not given.
     initial_slip : (N,) array, optional
         Slip state at θ = 0 (m); else the load is applied from the unloaded state.
@@ -442,7 +443,7 @@ def discrete_case(system: FrictionalSystem, load, run: Mapping | None = None, *,
     """
     settings = dict(RUN_DEFAULTS)
     for key, value in dict(run or {}).items():
-        key = "tol" if key == "tolerance" else key
+        key = "tol" if key in ("steady_tol", "tolerance") else key
         if key not in RUN_DEFAULTS:
             raise TypeError(f"unknown run setting {key!r} (known: {', '.join(RUN_DEFAULTS)})")
         settings[key] = value

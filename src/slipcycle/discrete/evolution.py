@@ -13,6 +13,15 @@ the load rate changes.
 Energy bookkeeping is exact on every linear piece: the dissipation of node j,
 D_j = −∫ q_j dv_j, and the work of the loads W = ∫ (vᵀ dq^w + wᵀ dp^w), which must equal
 Σ D_j over a closed (steady) cycle because the stored energy ½ xᵀKx + r^wᵀx returns.
+
+Linearisation of the cycle map. The rates of a piece depend on the modes and the load rate
+only, not on the state, so a perturbation δx of the state passes every load sample
+unchanged and is changed only at events: an event of the function g(x, θ) = aᵀx + b(θ)
+(rate ġ before it) moves by δt = −aᵀδx / ġ, so that afterwards δx ← (I − u aᵀ) δx with
+u = (ẋ_before − ẋ_after) / ġ. With ``jacobian_log`` set to a list the evolution records
+(event kind, node, u) for every event; :mod:`~slipcycle.discrete.periodic` composes them
+into the cycle map's Jacobian. ``signature`` (a hash) records the sequence of modes and
+events, so that two cycles with the same sequence are known to share one affine map.
 """
 
 from __future__ import annotations
@@ -20,11 +29,87 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from slipcycle.discrete.model import SEPARATED, SLIP_NEG, SLIP_POS, STICK, FrictionalSystem
 from slipcycle.discrete.rate import RateSolver
 
 __all__ = ["Evolution", "PathTotals"]
+
+
+@njit(cache=True)
+def _scan_events(f, q, p, w, qd, pd, wd, modes, tol, disp_tol, remaining):
+    """First event on the piece: (dt, kind, node, rate of its function); kind −1: none
+    before ``remaining``. Kinds: 0 a stuck node reaches q = −f p (g = f p + q), 1 q = +f p
+    (g = f p − q), 2 a node in contact reaches p = 0, 3 a separated node closes (w = 0).
+    Ties go to the lowest (kind, node), O(N) with no temporaries."""
+    best, bkind, bnode, brate = remaining, -1, -1, 0.0
+    for j in range(f.size):
+        m = modes[j]
+        for kind in range(4):
+            if kind <= 1:
+                if m != STICK:
+                    continue
+                s = 1.0 if kind == 0 else -1.0
+                g = f[j] * p[j] + s * q[j]
+                gd = f[j] * pd[j] + s * qd[j]
+                thr = tol
+            elif kind == 2:
+                if m == SEPARATED:
+                    continue
+                g, gd, thr = p[j], pd[j], tol
+            else:
+                if m != SEPARATED:
+                    continue
+                g, gd, thr = w[j], wd[j], disp_tol
+            if g > thr and gd < 0.0:
+                t = g / -gd
+                if t < best or (t == best and bkind >= 0 and
+                                (kind < bkind or (kind == bkind and j < bnode))):
+                    best, bkind, bnode, brate = t, kind, j, gd
+    return max(best, 0.0), bkind, bnode, brate
+
+
+@njit(cache=True)
+def _accumulate(modes, x, r, xd, rd, rw, dt, diss, slip_len, spos, sneg, sep, disp_tol, f,
+                margin):
+    """Exact integrals over a piece of length dt (products of linear functions) into the
+    totals, in place; returns (work of the loads, every node slipped or was open, x, r at
+    the end of the piece)."""
+    n = modes.size
+    erased = True
+    for j in range(n):
+        vd = xd[j]
+        m = modes[j]
+        diss[j] -= (r[j] + 0.5 * dt * rd[j]) * vd * dt
+        if m == SLIP_POS or m == SLIP_NEG:
+            slip_len[j] += abs(vd) * dt
+        if m == SLIP_POS and vd > 0:
+            spos[j] = True
+        if m == SLIP_NEG and vd < 0:
+            sneg[j] = True
+        if m == SEPARATED:
+            sep[j] = True
+        # a node that grazes its friction limit slips a round-off amount: that must not
+        # count towards erasing the memory
+        moving = abs(vd) * dt > disp_tol
+        if not (m == SEPARATED or (moving and ((m == SLIP_POS and vd > 0) or
+                                               (m == SLIP_NEG and vd < 0)))):
+            erased = False
+    work = 0.0
+    for i in range(x.size):
+        work += (x[i] + 0.5 * dt * xd[i]) * rw[i]
+    x1 = x + dt * xd
+    r1 = r + dt * rd
+    for j in range(n):
+        if modes[j] == SEPARATED:
+            mg = 0.0
+        else:
+            p = r1[n + j]
+            mg = min(f[j] * p - abs(r1[j]), p)
+        if mg < margin[j]:
+            margin[j] = mg
+    return work * dt, erased, x1, r1
 
 
 @dataclass
@@ -44,7 +129,7 @@ class PathTotals:
     slipped_positive, slipped_negative : (N,) bool arrays
         Node j slipped in that direction at some instant.
     all_slip_or_separated : bool
-        At some instant every node slipped or was separated (memory erased, seed §3.1).
+        At some instant every node slipped or was separated (memory erased, Barber 2012, §3.1).
     events : int
         Number of events located (state changes inside load segments).
     """
@@ -58,11 +143,14 @@ class PathTotals:
     all_slip_or_separated: bool = False
     events: int = 0
     samples: dict = field(default_factory=dict)
+    #: smallest margin min(f p − |q|, p) of each node at the ends of the pieces [N]
+    #: (0 while separated): how close a node that did not slip came to slipping
+    min_margin: np.ndarray = None
 
     @classmethod
     def zeros(cls, n: int) -> PathTotals:
         return cls(np.zeros(n), 0.0, np.zeros(n), np.zeros(n, bool), np.zeros(n, bool),
-                   np.zeros(n, bool))
+                   np.zeros(n, bool), min_margin=np.full(n, np.inf))
 
 
 class Evolution:
@@ -98,32 +186,25 @@ class Evolution:
         #: set to a list to record (x, r, modes) after every event piece (for checks)
         self.event_log: list | None = None
         self.max_events_per_segment = 20 * self.n + 200
+        #: set to a list to record the rank-one factors (kind, node, idx, u[idx]) of the
+        #: cycle map's Jacobian, one per event (module docstring)
+        self.jacobian_log: list | None = None
+        #: set to ``hashlib.blake2b()`` to hash the sequence of modes and events
+        self.signature = None
 
     def resync(self) -> None:
         """Recompute the reactions r = r^w + K x exactly (removes round-off drift)."""
         self.r = self.r_w + self.K @ self.x
 
     def _next_event(self, modes, x, r, xd, rd, remaining):
-        n, f, tol = self.n, self.f, self.force_tol
-        q, p, w = r[:n], r[n:], x[n:]
-        qd, pd, wd = rd[:n], rd[n:], xd[n:]
-        stick = modes == STICK
-        slip = (modes == SLIP_POS) | (modes == SLIP_NEG)
-        sep = modes == SEPARATED
-        vals = np.stack([f * p + q, f * p - q, p, w])
-        rates = np.stack([f * pd + qd, f * pd - qd, pd, wd])
-        use = np.stack([stick, stick, stick | slip, sep])
-        thresh = np.array([tol, tol, tol, self.solver.disp_tol])[:, None]
-        use &= (vals > thresh) & (rates < 0)
-        if not use.any():
+        n = self.n
+        dt, kind, j, rate = _scan_events(self.f, r[:n], r[n:], x[n:], rd[:n], rd[n:], xd[n:],
+                                         modes, self.force_tol, self.solver.disp_tol,
+                                         remaining)
+        if kind < 0:
             return remaining, None
-        t = np.full(vals.shape, np.inf)
-        t[use] = vals[use] / -rates[use]
-        k = int(np.argmin(t))
-        tmin = t.flat[k]
-        if tmin >= remaining:
-            return remaining, None
-        return max(tmin, 0.0), divmod(k, n)
+        self._event_rate = rate
+        return dt, (kind, j)
 
     def advance(self, r_w_end: np.ndarray, dtheta: float, totals: PathTotals) -> None:
         """Follow the linear load segment from the current load to ``r_w_end`` (2N,) over
@@ -131,34 +212,32 @@ class Evolution:
         if dtheta <= 0:
             return
         rw = (np.asarray(r_w_end, float) - self.r_w) / dtheta
-        n = self.n
         t = 0.0
         count = 0
         guess = self.modes
+        jlog, sig = self.jacobian_log, self.signature
+        pending = None
         while True:
             modes, xd, rd = self.solver.solve(self.x, self.r, rw, guess)
             self.modes = modes
+            if pending is not None:
+                # rank-one factor I − u aᵀ of the event just passed (module docstring)
+                kind, j, gdot, xd_b = pending
+                diff = xd_b - xd
+                idx = np.flatnonzero(diff)
+                jlog.append((kind, j, idx, diff[idx] / gdot))
+                pending = None
+            if sig is not None:
+                sig.update(modes.tobytes())
             dt, event = self._next_event(modes, self.x, self.r, xd, rd, dtheta - t)
             if dt > 0:
-                x, r = self.x, self.r
-                vd = xd[:n]
-                # exact integrals of products of linear functions over dt
-                totals.dissipation -= (r[:n] + 0.5 * dt * rd[:n]) * vd * dt
-                totals.work += float((x + 0.5 * dt * xd) @ rw) * dt
-                slipping = (modes == SLIP_POS) | (modes == SLIP_NEG)
-                totals.slip_length[slipping] += np.abs(vd[slipping]) * dt
-                totals.slipped_positive |= (modes == SLIP_POS) & (vd > 0)
-                totals.slipped_negative |= (modes == SLIP_NEG) & (vd < 0)
-                sep = modes == SEPARATED
-                totals.separated |= sep
-                # a node that grazes its friction limit slips a round-off amount: that
-                # must not count towards erasing the memory
-                moving = np.abs(vd) * dt > self.solver.disp_tol
-                if np.all((((modes == SLIP_POS) & (vd > 0)) | ((modes == SLIP_NEG) & (vd < 0)))
-                          & moving | sep):
+                work, erased, self.x, self.r = _accumulate(
+                    modes, self.x, self.r, xd, rd, rw, dt, totals.dissipation,
+                    totals.slip_length, totals.slipped_positive, totals.slipped_negative,
+                    totals.separated, self.solver.disp_tol, self.f, totals.min_margin)
+                totals.work += work
+                if erased:
                     totals.all_slip_or_separated = True
-                self.x = x + dt * xd
-                self.r = r + dt * rd
                 self.r_w = self.r_w + dt * rw
                 t += dt
             if self.event_log is not None:
@@ -167,6 +246,10 @@ class Evolution:
                 break
             # warm start: the node that caused the event most likely changes state so
             kind, j = event
+            if jlog is not None:
+                pending = (kind, j, self._event_rate, xd)
+            if sig is not None:
+                sig.update(bytes((kind,)) + int(j).to_bytes(4, "little"))
             guess = modes.copy()
             guess[j] = (SLIP_POS, SLIP_NEG, SEPARATED, STICK)[kind]
             count += 1
@@ -175,6 +258,8 @@ class Evolution:
                     f"more than {self.max_events_per_segment} events on one load segment "
                     f"(θ advanced {t:.3g} of {dtheta:.3g} rad): the evolution is stuck; "
                     "check that the model is well posed")
+        if sig is not None:
+            sig.update(b"|")
         self.events += count
         totals.events += count
         self.r_w = np.asarray(r_w_end, float).copy()

@@ -26,7 +26,14 @@ non-stuck nodes only (one per slipping node, two per separated node), of size k 
 Its inverse is kept current: when nodes change state it is updated by bordering (a node
 starts to slip or separates) or by the Schur-complement removal formula (a node sticks),
 O(k²) per changed node, and recomputed from scratch (O(k³)) only after many updates or
-when most of the set changes. A solve then costs O(k² + kN).
+when most of the set changes. The rows K[col] of the unknowns (K is symmetric, so they
+are its columns, and rows of a C-ordered matrix are contiguous) are kept in a buffer in
+the same order: a node that starts to slip appends its rows, one that sticks is replaced
+by the last (swap-delete), O(N) per changed unknown, never a gather over all of K. A solve
+then costs O(k² + kN) and streams 8(k² + 2kN) bytes once, in a compiled single-threaded
+loop (:func:`_mode_rates`); an event with r nodes changing state adds O(k² r + r N) for
+the updates (low-rank updates of an inverse: Golub & Van Loan, *Matrix Computations*,
+4th ed., §2.1.4).
 
 References
 ----------
@@ -39,12 +46,35 @@ problems", Comput. Oper. Res. 21 (1994) 587–596.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from slipcycle.discrete.lcp import lemke
 from slipcycle.discrete.model import SEPARATED, SLIP_NEG, SLIP_POS, STICK, FrictionalSystem
 from slipcycle.errors import SolverError
 
 __all__ = ["RateSolver", "RateProblemError"]
+
+
+@njit(cache=True)
+def _mode_rates(Minv, Kr, b, rw):
+    """Rates of the unknowns ``sol = −Minv b`` and reaction rates ṙ = ṙ^w + K ẋ, with
+    K ẋ = Σ_a sol_a K[col_a] over the unknowns' rows of the symmetric K: one streaming
+    pass over k rows of 2N (8·k·2N bytes), single-threaded so that a loaded machine
+    does not stall in a threaded BLAS call on a vector."""
+    k = b.size
+    sol = np.zeros(k)
+    for a in range(k):
+        s = 0.0
+        for c in range(k):
+            s -= Minv[a, c] * b[c]
+        sol[a] = s
+    rd = rw.copy()
+    for a in range(k):
+        s = sol[a]
+        if s != 0.0:
+            for i in range(rd.size):
+                rd[i] += s * Kr[a, i]
+    return sol, rd
 
 
 class RateProblemError(SolverError):
@@ -73,6 +103,11 @@ class RateSolver:
         self._updates = 0
         self._modes_key = None
         self._arrays = None
+        # rows K[col_b] of the unknowns, in the order of ``_unk`` (K is symmetric, so these
+        # are its columns; rows of a C-ordered matrix are contiguous): kept current row by
+        # row, O(N) per unknown added or removed, never gathered from all of K per event
+        self._Kr = np.zeros((0, 2 * self.n))
+        self._mark = np.zeros(8 * self.n + 4, bool)   # scratch for key-set differences
         self.stats = {"solves": 0, "factorizations": 0, "updates": 0, "pivots": 0,
                       "lemke": 0}
 
@@ -120,6 +155,8 @@ class RateSolver:
         self.stats["factorizations"] += 1
         self._updates = 0
         self._unk = keys
+        self._Kr = self._grow(keys.size)
+        self._Kr[:keys.size] = self.K[keys // 4]
         if keys.size == 0:
             self._Minv = np.zeros((0, 0))
             return True
@@ -136,10 +173,30 @@ class RateSolver:
         self._Minv = Minv
         return True
 
+    def _grow(self, k: int) -> np.ndarray:
+        """The row buffer with room for ``k`` unknowns (doubling: amortised O(N) per row)."""
+        if self._Kr.shape[0] < k:
+            buf = np.empty((max(2 * k, 16), 2 * self.n))
+            kk = 0 if self._unk is None else min(self._Kr.shape[0], self._unk.size)
+            buf[:kk] = self._Kr[:kk]
+            self._Kr = buf
+        return self._Kr
+
     def _remove(self, idx: np.ndarray) -> None:
-        """Drop unknowns at positions ``idx``: Schur-complement formula on the inverse."""
+        """Drop unknowns at positions ``idx``: Schur-complement formula on the inverse.
+
+        The last unknowns move into the holes (swap-delete), so that only the rows of K
+        that change place are copied: O(r N + k² r) for r removed of k unknowns."""
         P = self._Minv
-        keep = np.setdiff1d(np.arange(P.shape[0]), idx)
+        order = np.arange(P.shape[0])
+        size = order.size
+        buf = self._Kr
+        for i in np.sort(idx)[::-1]:
+            size -= 1
+            if i != size:
+                order[i] = order[size]
+                buf[i] = buf[size]
+        keep = order[:size]
         Pkr = P[np.ix_(keep, idx)]
         Prk = P[np.ix_(idx, keep)]
         Prr = P[np.ix_(idx, idx)]
@@ -156,10 +213,16 @@ class RateSolver:
         PB = P @ Bm
         CP = Cm @ P
         S = Dm - Cm @ PB
-        try:
-            Sinv = np.linalg.inv(S)
-        except np.linalg.LinAlgError:
-            return False
+        if S.shape == (1, 1):
+            # one node changes state (the usual event): a scalar pivot, no LAPACK call
+            if not (np.isfinite(S[0, 0]) and S[0, 0] != 0.0):
+                return False
+            Sinv = 1.0 / S
+        else:
+            try:
+                Sinv = np.linalg.inv(S)
+            except np.linalg.LinAlgError:
+                return False
         if not np.all(np.isfinite(Sinv)) or (
                 np.abs(S).sum(axis=0).max() * np.abs(Sinv).sum(axis=0).max() > 1e13):
             return False
@@ -170,6 +233,8 @@ class RateSolver:
         Q[:k, k:] = -PBS
         Q[k:, :k] = -Sinv @ CP
         Q[k:, k:] = Sinv
+        buf = self._grow(k + r)
+        buf[k:k + r] = self.K[new // 4]
         self._Minv = Q
         self._unk = np.concatenate([old, new])
         return True
@@ -186,8 +251,13 @@ class RateSolver:
         if self._unk is None:
             ok = self._rebuild(target)
         else:
-            drop = np.flatnonzero(~np.isin(self._unk, target))
-            add = target[~np.isin(target, self._unk)]
+            mark, unk = self._mark, self._unk
+            mark[target] = True
+            drop = np.flatnonzero(~mark[unk])
+            mark[target] = False
+            mark[unk] = True
+            add = target[~mark[target]]
+            mark[unk] = False
             nchange = drop.size + add.size
             if nchange == 0:
                 ok = True
@@ -218,12 +288,11 @@ class RateSolver:
         if self._unk.size == 0:
             return xd, rw.copy()
         if self._arrays is None:
-            cols, j, cq, cp = self._decode(self._unk)
-            self._arrays = (cols, j, cq, cp, np.ascontiguousarray(self.K[:, cols]))
-        cols, j, cq, cp, Kc = self._arrays
-        sol = self._Minv @ -(cq * rw[j] + cp * rw[self.n + j])
+            self._arrays = self._decode(self._unk)
+        cols, j, cq, cp = self._arrays
+        sol, rd = _mode_rates(self._Minv, self._Kr, cq * rw[j] + cp * rw[self.n + j], rw)
         xd[cols] = sol
-        return xd, rw + Kc @ sol
+        return xd, rd
 
     # -- consistency --------------------------------------------------------------------
     def violations(self, modes, flags, xd, rd, rate_tol):

@@ -1,0 +1,199 @@
+"""The periodic-state step (``simulate(accelerate=True)``) reaches the limit of plain cycling.
+
+The cycle map of the event-driven solver is piecewise affine; Newton steps on it, each
+checked by an exact cycle, must land on the state that plain cycling converges to from the
+same history (Barber 2012 §3: the permanently stuck nodes keep their slip), with the same
+class, dissipation, dissipation per node and stuck set. Independent references: plain
+cycling (``accelerate=False``) to a tight tolerance, its geometric extrapolation
+(Aitken), and finite differences of the cycle map for its Jacobian.
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+from slipcycle.discrete import DiscreteLoad, FrictionalSystem, critical_friction, simulate
+from slipcycle.discrete.evolution import Evolution
+from slipcycle.discrete.periodic import cycle_jacobian, periodic_step
+from slipcycle.discrete.steady import InadmissibleInitialState
+from slipcycle.fe.builders import block_on_rigid
+from slipcycle.fe.loads import combined_loads
+from slipcycle.fe.reduction import reduce_problem
+
+
+def slid_block(elements: int):
+    """The steel block of fe_block_nu03.toml reduced with ``elements`` quadratic elements
+    across the contact (2·elements + 1 nodes), assembled slide-first."""
+    r = reduce_problem(block_on_rigid(width=0.04, height=0.02, E=210e9, nu=0.3,
+                                      elements=elements, thickness=0.01))
+    load = DiscreteLoad(*combined_loads(r, {"normal": 2e-6},
+                                        {"normal": 0.5e-6, "tangential": 1.5e-6},
+                                        {"tangential": np.pi / 2}))
+    system = FrictionalSystem(r.A, r.B, r.C, 0.5, accept_ill_posed=True)
+    protocol = np.array([np.concatenate(r.combine(normal=a, tangential=t))
+                         for a, t in ((0.2e-6, 0.0), (0.2e-6, 3e-6), (2e-6, 3e-6))])
+    return system, load, protocol
+
+
+def _aitken_limit(starts: np.ndarray) -> tuple[np.ndarray, float]:
+    """Limit of a geometrically converging sequence from its last three terms, and the
+    distance bound |d|ρ/(1−ρ) of its last term."""
+    d1 = starts[-1] - starts[-2]
+    d0 = starts[-2] - starts[-3]
+    rho = float(np.linalg.norm(d1) / np.linalg.norm(d0))
+    return starts[-1] + d1 * rho / (1 - rho), float(np.abs(d1).max() * rho / (1 - rho))
+
+
+@pytest.mark.parametrize("elements", [20, pytest.param(50, marks=pytest.mark.slow)])
+def test_fe_block_periodic_step_lands_on_the_limit_of_plain_cycling(elements):
+    """41 (101) contact nodes: plain cycling creeps for 214 (377) cycles; the step gets
+    there in about 10 (17) cycles, and its state is the plain sequence's geometric limit
+    (within half the plain run's remaining distance), with the same slipping,
+    stuck and separating nodes and the same dissipation to the plain run's own accuracy."""
+    system, load, protocol = slid_block(elements)
+    kw = dict(cycles=600, steps_per_cycle=50, protocol=protocol, record=False)
+    fast = simulate(system, load, accelerate=True, tol=1e-10, **kw)
+    plain = simulate(system, load, accelerate=False, **kw)
+    assert fast.steady_state == plain.steady_state == "cyclic_slip"
+    assert fast.cycles_run < plain.cycles_run / 8
+    assert fast.solver_stats["periodic_steps"] >= 1
+    assert fast.slipping_nodes == plain.slipping_nodes
+    assert fast.permanently_stuck_nodes == plain.permanently_stuck_nodes
+    assert fast.separating_nodes == plain.separating_nodes
+    limit, remaining = _aitken_limit(plain.cycle_start_states)
+    x_fast = fast.cycle_start_states[-1]
+    assert np.abs(x_fast - plain.cycle_start_states[-1]).max() <= 2 * remaining
+    assert np.abs(x_fast - limit).max() <= 0.5 * remaining
+    # D of a state `remaining` away differs by O(remaining / state scale) relative
+    rel = remaining / np.abs(x_fast).max()
+    D = fast.dissipation_per_cycle
+    assert D == pytest.approx(plain.dissipation_per_cycle, rel=max(1e3 * rel, 1e-6))
+    np.testing.assert_allclose(fast.dissipation_per_node, plain.dissipation_per_node,
+                               rtol=0, atol=max(1e3 * rel, 1e-6) * D)
+    assert fast.energy_balance_error < 1e-8
+
+
+def test_fe_block_41_dissipation_equals_tightly_converged_plain_cycling():
+    """Plain cycling to 1e-14 (508 cycles, measured once: D = 3.1769966252792746e-07 J)
+    and the step at tolerance 1e-10 agree to 1e-7."""
+    system, load, protocol = slid_block(20)
+    fast = simulate(system, load, cycles=100, steps_per_cycle=50, protocol=protocol,
+                    record=False, tol=1e-10)
+    assert fast.dissipation_per_cycle == pytest.approx(3.1769966252792746e-07, rel=1e-7)
+
+
+def _random_case(seed: int, n: int, sep: bool):
+    rng = np.random.default_rng(seed)
+    G = rng.normal(size=(2 * n, 2 * n))
+    K = G @ G.T + 0.5 * np.eye(2 * n)
+    A, B, C = K[:n, :n], K[n:, :n], K[n:, n:]
+    fc = critical_friction(A, B).f_crit
+    f = float(min(0.8 * fc, rng.uniform(0.05, 1.0)))
+    system = FrictionalSystem(A, B, C, f)
+    p0 = rng.uniform(0.2, 1.5, n)
+    p1 = rng.uniform(0.0, 2.0 if sep else 0.8, n) * (p0 if sep else 1.0)
+    load = DiscreteLoad.harmonic(p0, rng.normal(size=n) * 0.1, p1,
+                                 rng.uniform(0, 1.2, n), rng.uniform(0, 6.3, n),
+                                 rng.uniform(0, 6.3, n))
+    return system, load
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 100_000), n=st.integers(1, 6), sep=st.booleans(),
+       start=st.sampled_from(["load", "slip"]))
+def test_random_systems_same_steady_state_with_and_without_the_step(seed, n, sep, start):
+    """Whatever the class (shakedown, cyclic slip, ratcheting, with or without separation),
+    the step changes nothing but the number of cycles: same class, stuck and slipping
+    nodes, and D to the cycling tolerance (both runs to 1e-11)."""
+    system, load = _random_case(seed, n, sep)
+    kw = dict(cycles=400, steps_per_cycle=40, tol=1e-11, record=False)
+    if start == "slip":
+        rng = np.random.default_rng(seed + 1)
+        kw["initial_slip"] = rng.normal(size=n) * 0.05 * float(
+            np.abs(load(np.zeros(1))).max()) / float(np.max(np.diag(system.A)))
+    try:
+        plain = simulate(system, load, accelerate=False, **kw)
+    except InadmissibleInitialState:      # nothing to compare
+        assume(False)
+    fast = simulate(system, load, accelerate=True, **kw)
+    assume(plain.steady_state != "not_converged")
+    assert fast.steady_state == plain.steady_state
+    scale = max(abs(plain.dissipation_per_cycle), plain.force_scale * plain.disp_scale)
+    assert abs(fast.dissipation_per_cycle - plain.dissipation_per_cycle) <= 1e-6 * scale
+    np.testing.assert_allclose(fast.dissipation_per_node, plain.dissipation_per_node,
+                               rtol=0, atol=1e-6 * scale)
+    assert fast.permanently_stuck_nodes == plain.permanently_stuck_nodes
+    assert fast.separating_nodes == plain.separating_nodes
+
+
+def test_cycle_jacobian_matches_finite_differences_of_the_cycle_map():
+    """M from the rank-one event factors equals (Φ(x + εe) − Φ(x))/ε on the moving
+    coordinates of a 41-node block near its orbit (same sequence of events)."""
+    system, load, protocol = slid_block(20)
+    n = system.n_nodes
+    theta, vals = load.cycle_samples(50)
+    F = float(np.abs(np.vstack([vals, protocol])).max())
+    evo = Evolution(system, np.zeros(2 * n), np.zeros(2 * n), F)
+    path = np.vstack([np.zeros(2 * n), protocol, vals[0]])
+    evo.follow(np.arange(len(path), dtype=float), path)
+    evo.resync()
+    for _ in range(40):
+        evo.follow(theta, vals)
+        evo.resync()
+
+    def cycle(x):
+        evo.x = x.copy()
+        evo.resync()
+        evo.jacobian_log = []
+        evo.signature = hashlib.blake2b()
+        evo.follow(theta, vals)
+        evo.resync()
+        return evo.x.copy(), evo.signature.digest(), evo.jacobian_log
+
+    x0 = evo.x.copy()
+    modes0 = evo.modes.copy()
+    fx, sig, log = cycle(x0)
+    jac = cycle_jacobian(log, system.K, system.friction)
+    assert jac.S.size > 0
+    # slip coordinates of the moving nodes (a slip perturbation keeps contact admissible)
+    eps = 1e-4 * float(np.abs(fx - x0).max())
+    checked = 0
+    for i in jac.S[jac.S < n]:
+        e = np.zeros(jac.S.size)
+        e[np.searchsorted(jac.S, i)] = 1.0
+        evo.modes = modes0.copy()
+        xp = x0.copy()
+        xp[i] += eps
+        fxp, sigp, _ = cycle(xp)
+        if sigp != sig:
+            continue
+        fd = (fxp - fx)[jac.S] / eps
+        np.testing.assert_allclose(fd, e - jac.apply(e), rtol=0, atol=1e-5)
+        checked += 1
+    assert checked >= 1
+
+
+def test_step_refuses_a_drift_and_keeps_memory_of_stuck_coordinates():
+    """An increment outside the moving coordinates is a drift (refused); inside, the step
+    changes only the moving coordinates."""
+    K = np.array([[2.0, 0.3, 0.1, 0.0], [0.3, 2.0, 0.0, 0.1],
+                  [0.1, 0.0, 2.0, 0.2], [0.0, 0.1, 0.2, 2.0]])
+    # one event moving node 0 only: M = I − u aᵀ on S = {0}
+    log = [(0, 0, np.array([0]), np.array([0.25]))]
+    jac = cycle_jacobian(log, K, np.array([0.5, 0.5]))
+    assert list(jac.S) == [0]
+    r = np.array([1e-3, 0.0, 0.0, 0.0])
+    step = periodic_step(jac, r, 1e-12)
+    a = 0.5 * K[2, 0] + K[0, 0]          # g = f p + q of node 0
+    m = 1 - 0.25 * a                      # M restricted to S
+    assert step.delta is not None
+    assert step.delta[0] == pytest.approx(1e-3 / (1 - m), rel=1e-12)
+    assert np.all(step.delta[1:] == 0.0)
+    assert step.spectral_radius == pytest.approx(abs(m), rel=1e-12)
+    drift = periodic_step(jac, np.array([1e-3, 1e-4, 0.0, 0.0]), 1e-12)
+    assert drift.delta is None
