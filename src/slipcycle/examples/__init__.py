@@ -105,9 +105,11 @@ def copy_examples(target: str | Path, names: list[str] | None = None, *,
     """
     target = Path(target)
     sources = [example_path(n) for n in (names if names is not None else list_examples())]
-    # the data files the cases name (a measured topography, tables) travel with them
+    # the data files a case names (a measured topography, a table) travel with it
+    texts = [p.read_text(encoding="utf-8") for p in sources]
     sources += [Path(str(p)) for p in _folder().iterdir()
-                if p.is_file() and p.name.rsplit(".", 1)[-1] in _DATA_SUFFIXES]
+                if p.is_file() and p.name.rsplit(".", 1)[-1] in _DATA_SUFFIXES
+                and any(p.name in t for t in texts)]
     clashes = [target / p.name for p in sources if (target / p.name).exists()]
     if clashes and not overwrite:
         raise FileExistsError(f"{clashes[0]} exists (use --force to replace the examples "
