@@ -540,7 +540,8 @@ class DiscreteResult(RunResult):
         return figures
 
 
-def solve_model(dc, load=None, run: Mapping | None = None, **kwargs) -> DiscreteResult:
+def solve_model(dc, load=None, run: Mapping | None = None, *, progress=None,
+                **kwargs) -> DiscreteResult:
     """Solve a discrete system to its steady state.
 
     Parameters
@@ -551,6 +552,9 @@ def solve_model(dc, load=None, run: Mapping | None = None, **kwargs) -> Discrete
         The periodic loads of ``dc`` when it is a system.
     run : mapping, optional
         Run settings for a system (see :func:`discrete_case`).
+    progress : callable, optional
+        ``progress(cycles_done, cycles)`` after each cycle (:func:`slipcycle.run` passes
+        the command line's progress bar).
     **kwargs
         ``initial_slip``, ``protocol``, ``f_crit_exact_max_nodes`` of :func:`discrete_case`.
 
@@ -566,23 +570,25 @@ def solve_model(dc, load=None, run: Mapping | None = None, **kwargs) -> Discrete
         raise TypeError("expected a DiscreteCase, or a FrictionalSystem with its load")
     t0 = time.perf_counter()
     res = simulate(dc.system, dc.load, initial_slip=dc.initial_slip, protocol=dc.protocol,
-                   **dc.run)
+                   progress=progress, **dc.run)
     return DiscreteResult.from_solution(dc, res, time.perf_counter() - t0)
 
 
-def solve_case(case: Case) -> DiscreteResult:
+def solve_case(case: Case, progress=None) -> DiscreteResult:
     """Validate a discrete case completely (CaseError before any computation), then solve.
 
     Parameters
     ----------
     case : Case
         A ``model = "discrete"`` case.
+    progress : callable, optional
+        ``progress(cycles_done, cycles)`` after each cycle.
 
     Returns
     -------
     DiscreteResult
     """
-    return solve_model(read_discrete_case(case))
+    return solve_model(read_discrete_case(case), progress=progress)
 
 
 def run_case(case: Case) -> RunOutputs:

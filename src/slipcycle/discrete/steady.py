@@ -22,6 +22,7 @@ and checks every step by an exact cycle; ``accelerate=False`` is plain cycling.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -237,7 +238,8 @@ def _force_scale(values: np.ndarray) -> float:
 def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
              steps_per_cycle: int = 100, initial_slip: np.ndarray | None = None,
              protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,
-             record: bool = True, accelerate: bool | None = None) -> SteadyResult:
+             record: bool = True, accelerate: bool | None = None,
+             progress: Callable[[float, float], None] | None = None) -> SteadyResult:
     """Run load cycles to the steady state.
 
     Parameters
@@ -266,6 +268,9 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         Step to the periodic state once two consecutive cycles share one sequence of modes
         and events (:mod:`~slipcycle.discrete.periodic`), then check it by an exact cycle;
         ``False``: plain cycling. Default (None): on for N ≥ :data:`ACCELERATE_MIN_NODES`.
+    progress : callable, optional
+        ``progress(cycles_done, cycles)``, called after each cycle (a progress bar); the run
+        may stop before ``cycles`` at its steady state.
 
     Returns
     -------
@@ -305,6 +310,8 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
             evo.jacobian_log = []
         totals = evo.follow(theta, vals, record=record)
         evo.resync()
+        if progress is not None:
+            progress(c + 1, cycles)
         starts.append(evo.x.copy())
         events.append(totals.events)
         diss_hist.append(float(totals.dissipation.sum()))
