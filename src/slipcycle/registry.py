@@ -64,7 +64,7 @@ class ModelEntry:
 MODELS: dict[str, ModelEntry] = {
     "halfspace": ModelEntry(
         "slipcycle.halfspace.case:run_case", "slipcycle.halfspace.case:parse_case",
-        ("run", "map", "sweep"),
+        ("run", "map", "roughness", "sweep"),
         solver="slipcycle.halfspace.case:solve_case",
         model_solver="slipcycle.halfspace.case:solve_model",
         model_types=("slipcycle.halfspace.model:HalfspaceModel",),
@@ -77,6 +77,14 @@ MODELS: dict[str, ModelEntry] = {
         model_types=("slipcycle.discrete.case:DiscreteCase",
                      "slipcycle.discrete.model:FrictionalSystem"),
         result="slipcycle.discrete.case:DiscreteResult"),
+    "discrete3d": ModelEntry(
+        "slipcycle.discrete3d.case:run_case",
+        "slipcycle.discrete3d.case:read_discrete3d_case", ("run", "sweep"),
+        solver="slipcycle.discrete3d.case:solve_case",
+        model_solver="slipcycle.discrete3d.case:solve_model",
+        model_types=("slipcycle.discrete3d.case:Discrete3DCase",
+                     "slipcycle.discrete3d.model:FrictionalSystem3D"),
+        result="slipcycle.discrete3d.case:DiscreteResult3D"),
     "rods": ModelEntry(
         "slipcycle.rods.case:run_case", "slipcycle.rods.case:parse_case",
         ("run", "limits", "sweep"),

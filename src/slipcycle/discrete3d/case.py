@@ -1,0 +1,553 @@
+"""``model = "discrete3d"``: case file → model → steady state → results.
+
+Every key is read and checked (:func:`read_discrete3d_case`) before any computation;
+:func:`solve_case` then solves and returns a :class:`DiscreteResult3D`. Keys are documented
+in ``docs/discrete3d.md``; they mirror the 2-D ``discrete`` case with two tangential
+components per node (node-major: ``q0 = [[q_t1, q_t2], ...]``).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+import xarray as xr
+
+from slipcycle.discrete3d.fields import write_fields
+from slipcycle.discrete3d.loads import Load3D, LoadCase3D
+from slipcycle.discrete3d.model import STATE_NAMES, FrictionalSystem3D, ModelError3D
+from slipcycle.discrete3d.steady import (
+    STEADY_CLASSES,
+    InadmissibleInitialState3D,
+    SteadyResult3D,
+    initial_state_3d,
+    simulate3d,
+)
+from slipcycle.io import Case, CaseError, RunOutputs, Section
+from slipcycle.io.matrices import read_case_stiffness
+from slipcycle.loading import HarmonicLoad, TabulatedLoad
+from slipcycle.result import STEADY_STATES, RunResult, SteadyState
+
+__all__ = ["Discrete3DCase", "DiscreteResult3D", "read_discrete3d_case", "discrete3d_case",
+           "solve_case", "solve_model", "run_case", "SUMMARY_UNITS", "SUMMARY_FLAGS",
+           "RUN_DEFAULTS"]
+
+#: run settings of a case built in Python (the defaults of the ``[run]`` table)
+RUN_DEFAULTS = {"cycles": 40, "steps_per_cycle": 100, "tol": 1e-8, "min_cycles": 1,
+                "step_tol": 1e-7}
+FIELD_FORMATS = ("xdmf", "pvd")
+
+
+@dataclass(frozen=True)
+class Discrete3DCase:
+    """A validated 3-D discrete case.
+
+    Attributes
+    ----------
+    system : FrictionalSystem3D
+    load : Load3D
+    run : dict
+        ``cycles``, ``steps_per_cycle``, ``tol``, ``min_cycles``, ``step_tol``.
+    initial_slip : (N, 2) array or None
+    protocol : (S, 3N) array or None
+    fields : tuple of str
+        Field file formats to write (``"xdmf"``, ``"pvd"``; empty: none).
+    """
+
+    system: FrictionalSystem3D
+    load: Load3D
+    run: dict
+    initial_slip: np.ndarray | None = None
+    protocol: np.ndarray | None = None
+    fields: tuple = FIELD_FORMATS
+
+
+def _matrices(case: Case, sec: Section) -> tuple[dict, dict]:
+    """A, B, C and node geometry, inline or from ``stiffness_file``; (values, key of each)."""
+    if sec.has("stiffness_file"):
+        for k in ("A", "B", "C"):
+            if sec.has(k):
+                raise sec.error(k, "give either stiffness_file or A, B, C inline, not both")
+        path = sec.path("stiffness_file")
+        red = read_case_stiffness(sec, path, 2)
+        key = sec.key("stiffness_file")
+        vals = {"A": red.A, "B": red.B, "C": red.C, "coordinates": red.coordinates,
+                "normals": red.normals, "tangents": red.tangents, "loads": red.loads}
+        return vals, {k: f"{key} (matrix {k})" for k in ("A", "B", "C")}
+    C = sec.array("C", shape=(None, None))
+    n = C.shape[0]
+    A = sec.array("A", shape=(2 * n, 2 * n))
+    B = sec.array("B", shape=(n, 2 * n))
+    return ({"A": A, "B": B, "C": C, "coordinates": None, "normals": None, "tangents": None,
+             "loads": {}}, {k: sec.key(k) for k in ("A", "B", "C")})
+
+
+def _per_node2(sec: Section, key: str, n: int, default=None) -> np.ndarray | None:
+    """An (N, 2) per-node tangential vector (a bare number fills both components)."""
+    arr = sec.array(key, default, shape=(n, 2), scalar_ok=True)
+    return None if arr is None else arr.reshape(2 * n)
+
+
+def _periodic(sec: Section, name: str, n: int, lam: float):
+    """Load ``name`` (p: (N,), q: (N, 2) per value) harmonic or tabulated."""
+    shape = (n,) if name == "p" else (n, 2)
+    size = int(np.prod(shape))
+    mean = sec.array(f"{name}0", np.zeros(shape) if name == "q" else None, shape=shape,
+                     scalar_ok=True)
+    if mean is None:
+        raise sec.error(f"{name}0", "required key is missing (mean normal load per node)")
+    mean = mean.reshape(size)
+    table_key, amp_key = f"{name}_table", f"{name}1"
+    if sec.has(table_key):
+        if sec.has(amp_key):
+            raise sec.error(amp_key, f"give either {amp_key} (harmonic) or {table_key} "
+                                     "(tabulated), not both")
+        theta = sec.array("theta", shape=(None,), ge=0.0, lt=2 * np.pi)
+        if theta.size < 2 or np.any(np.diff(theta) <= 0):
+            raise sec.error("theta", "must have at least 2 strictly increasing angles in "
+                                     "[0, 2π)")
+        vals = sec.array(table_key, shape=(theta.size, *shape))
+        return TabulatedLoad(theta, vals.reshape(theta.size, size), mean, lam)
+    raw = sec.array(amp_key, np.zeros(shape))
+    amp = (sec.coerce_array(amp_key, raw, shape=shape)[None] if raw.ndim == len(shape)
+           else sec.coerce_array(amp_key, raw, shape=(None, *shape)))
+    amp = amp.reshape(-1, size)
+    ph = sec.array(f"{name}1_phase", 0.0)
+    if ph.ndim == 0:
+        ph = np.full(amp.shape, float(ph))
+    elif ph.ndim == len(shape) and amp.shape[0] == 1:
+        ph = sec.coerce_array(f"{name}1_phase", ph, shape=shape).reshape(1, size)
+    else:
+        ph = sec.coerce_array(f"{name}1_phase", ph,
+                              shape=(amp.shape[0], *shape)).reshape(amp.shape)
+    return HarmonicLoad(mean, amp, ph, lam)
+
+
+def _time_function(sec: Section, lam: float):
+    """Scalar time function g(θ) = mean + λ g̃(θ) of a load case."""
+    mean = sec.float("mean", 0.0)
+    if sec.has("theta"):
+        theta = sec.array("theta", shape=(None,), ge=0.0, lt=2 * np.pi)
+        if theta.size < 2 or np.any(np.diff(theta) <= 0):
+            raise sec.error("theta", "must have at least 2 strictly increasing angles in "
+                                     "[0, 2π)")
+        vals = sec.array("values", shape=(theta.size,))
+        return TabulatedLoad(theta, vals[:, None], [mean], lam)
+    amp = np.atleast_1d(sec.array("amplitude", 0.0))
+    if amp.ndim != 1:
+        raise sec.error("amplitude", "must be a number or a list (one per harmonic)")
+    phase = np.atleast_1d(sec.array("phase", 0.0))
+    if phase.size == 1:
+        phase = np.full(amp.shape, float(phase[0]))
+    elif phase.shape != amp.shape:
+        raise sec.error("phase", f"must be a number or a list of {amp.size} phases")
+    return HarmonicLoad([mean], amp[:, None], phase[:, None], lam)
+
+
+def _case_error(exc: ModelError3D, keys: Mapping[str, str]) -> CaseError:
+    problem = exc.problem
+    if exc.remedy is not None:
+        field, value, purpose = exc.remedy
+        toml_value = str(value).lower() if isinstance(value, bool) else repr(value)
+        problem = f"{exc.detail}. Set {keys.get(field, field)} = {toml_value} to {purpose}"
+    return CaseError(keys.get(exc.name, exc.name), problem)
+
+
+def read_discrete3d_case(case: Case) -> Discrete3DCase:
+    """Read and validate every key of a ``discrete3d`` case; no computation beyond checks.
+
+    Parameters
+    ----------
+    case : Case
+
+    Returns
+    -------
+    Discrete3DCase
+
+    Raises
+    ------
+    CaseError
+        Naming the offending key and the problem.
+    """
+    sec = case.section("discrete3d")
+    mats, mkeys = _matrices(case, sec)
+    n = np.asarray(mats["C"]).shape[0]
+    friction = sec.array("friction", shape=(n,), scalar_ok=True)
+    accept = sec.bool("accept_ill_posed", False)
+    coords = sec.array("coordinates", mats["coordinates"], shape=(n, 3))
+    area = sec.array("area", 1.0, shape=(n,), scalar_ok=True, gt=0.0)
+    init = sec.array("initial_slip", None, shape=(n, 2))
+    proto_secs = sec.tables("protocol", None)
+    if init is not None and proto_secs:
+        raise sec.error("protocol", "give either initial_slip or an assembly protocol, "
+                                    "not both")
+    protocol = None
+    if proto_secs:
+        states = []
+        for ps in proto_secs:
+            p = ps.array("p_w", shape=(n,), scalar_ok=True)
+            q = _per_node2(ps, "q_w", n, np.zeros((n, 2)))
+            states.append(np.concatenate([q, p]))
+            ps.finish()
+        protocol = np.array(states)
+
+    ld = case.section("loading")
+    lam = ld.float("lam", 1.0, ge=0.0)
+    p_load = _periodic(ld, "p", n, lam)
+    q_load = _periodic(ld, "q", n, lam)
+    cases = []
+    for cs in ld.tables("load_case", None):
+        if cs.has("file_case"):
+            name = cs.string("file_case")
+            if name not in mats["loads"]:
+                known = ", ".join(mats["loads"]) or "none"
+                raise cs.error("file_case", f"the stiffness_file has no load case {name!r} "
+                                            f"(it has: {known})")
+            qvec = np.asarray(mats["loads"][name]["q"], float)
+            pvec = np.asarray(mats["loads"][name]["p"], float)
+        else:
+            pvec = cs.array("p", np.zeros(n), shape=(n,))
+            qvec = _per_node2(cs, "q", n, np.zeros((n, 2)))
+        cases.append(LoadCase3D(qvec, pvec, _time_function(cs, lam)))
+        cs.finish()
+    load = Load3D(q_load, p_load, tuple(cases))
+
+    rn = case.section("run", required=False)
+    run = {
+        "cycles": rn.int("cycles", 40, ge=1),
+        "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1),
+        "tol": rn.float("tolerance", 1e-8, gt=0.0, lt=1.0),
+        "min_cycles": rn.int("min_cycles", 1, ge=1),
+        "step_tol": rn.float("step_tolerance", 1e-7, gt=0.0, lt=1.0),
+    }
+    out = case.section("output", required=False)
+    fields = out.data.get("fields", list(FIELD_FORMATS))
+    if isinstance(fields, str):
+        fields = [fields]
+    if not isinstance(fields, list) or any(f not in FIELD_FORMATS for f in fields):
+        raise out.error("fields", f"must be a list of {', '.join(FIELD_FORMATS)} (or [] for "
+                                  f"no field files), got {fields!r}")
+    out._used.add("fields")
+    case.finish()
+
+    try:
+        system = FrictionalSystem3D(mats["A"], mats["B"], mats["C"], friction,
+                                    coordinates=coords, normals=mats["normals"],
+                                    tangents=mats["tangents"], area=area,
+                                    accept_ill_posed=accept)
+    except ModelError3D as exc:
+        keys = {**{k: sec.key(k) for k in ("friction", "accept_ill_posed", "coordinates",
+                                           "area")}, **mkeys}
+        raise _case_error(exc, keys) from None
+    if init is not None:
+        r0 = load(np.array([0.0]))[0]
+        F = max(float(np.max(np.abs(load.cycle_samples(run["steps_per_cycle"])[1]))), 1e-300)
+        try:
+            initial_state_3d(system, r0, init, 1e-10 * F)
+        except InadmissibleInitialState3D as exc:
+            raise sec.error("initial_slip", f"inadmissible at θ = 0: {exc}") from None
+    return Discrete3DCase(system, load, run, init, protocol, tuple(fields))
+
+
+def discrete3d_case(system: FrictionalSystem3D, load: Load3D, run: Mapping | None = None, *,
+                    initial_slip=None, protocol=None, fields=FIELD_FORMATS) -> Discrete3DCase:
+    """A :class:`Discrete3DCase` from Python objects.
+
+    Parameters
+    ----------
+    system : FrictionalSystem3D
+    load : Load3D
+    run : mapping, optional
+        ``cycles``, ``steps_per_cycle``, ``tol`` (or ``tolerance``), ``min_cycles``,
+        ``step_tol``; :data:`RUN_DEFAULTS` for the others.
+    initial_slip : (N, 2) array, optional
+    protocol : (S, 3N) array, optional
+    fields : tuple of str
+        Field formats written by ``to_outputs`` (``"xdmf"``, ``"pvd"``).
+
+    Returns
+    -------
+    Discrete3DCase
+    """
+    settings = dict(RUN_DEFAULTS)
+    for key, value in dict(run or {}).items():
+        key = "tol" if key == "tolerance" else key
+        if key not in RUN_DEFAULTS:
+            raise TypeError(f"unknown run setting {key!r} (known: {', '.join(RUN_DEFAULTS)})")
+        settings[key] = value
+    return Discrete3DCase(system, load, settings,
+                          None if initial_slip is None else np.asarray(initial_slip, float),
+                          None if protocol is None else np.asarray(protocol, float),
+                          tuple(fields))
+
+
+#: unit of every numeric summary entry
+SUMMARY_UNITS = {
+    "n_nodes": "1", "converged": "1", "residual": "1", "cycles_run": "1",
+    "dissipation_per_cycle": "J", "dissipation_per_node": "J",
+    "dissipation_per_area": "J/m^2", "work_of_loads_per_cycle": "J",
+    "energy_balance_error": "1", "slipping_nodes": "1", "permanently_stuck_nodes": "1",
+    "separating_nodes": "1", "separation": "1", "ratchet_per_cycle": "m",
+    "memory_erased": "1", "f_crit": "1", "f_crit_lower_bound": "1", "friction_max": "1",
+    "well_posed": "1", "steps_last_cycle": "1", "refinements_last_cycle": "1",
+    "unresolved_steps": "1", "newton_iterations": "1", "wall_time_s": "s",
+}
+
+#: every word of the categorical summary entries
+SUMMARY_FLAGS = {"steady_state": STEADY_CLASSES, "steady_state_class": STEADY_STATES}
+
+_MESSAGES = {
+    "shakedown": "shakedown: no node slips in the steady cycle",
+    "cyclic_slip": "cyclic slip: some nodes slip every cycle, the others stay stuck",
+    "ratcheting": "ratcheting: slip accumulates by the same amount every cycle",
+    "not_converged": "no steady cycle within the cycles allowed",
+}
+
+
+def _finite(x):
+    return None if x is None or not np.isfinite(x) else float(x)
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class DiscreteResult3D(RunResult):
+    """Result of a ``discrete3d`` run (the shared vocabulary of
+    :class:`~slipcycle.result.RunResult`).
+
+    Attributes
+    ----------
+    case : Discrete3DCase
+    solution : SteadyResult3D
+    wall_time : float
+        Seconds the simulation took.
+    """
+
+    model: ClassVar[str] = "discrete3d"
+
+    case: Discrete3DCase
+    solution: SteadyResult3D
+    wall_time: float
+
+    @classmethod
+    def from_solution(cls, dc: Discrete3DCase, res: SteadyResult3D, wall: float
+                      ) -> DiscreteResult3D:
+        """Wrap the output of :func:`~slipcycle.discrete3d.steady.simulate3d`."""
+        msg = (f"{_MESSAGES[res.steady_state]} ({res.cycles_run} cycles, residual "
+               f"{res.residual:.3g})")
+        return cls(steady_state=SteadyState(res.steady_state),
+                   steady_state_detail=res.steady_state,
+                   dissipation_per_cycle=res.dissipation_per_cycle,
+                   cycles_run=int(res.cycles_run), residual=float(res.residual),
+                   converged=bool(res.steady_converged), message=msg, case=dc,
+                   solution=res, wall_time=wall)
+
+    @property
+    def flags(self) -> dict[str, tuple[str, ...]]:
+        """Every word of the categorical summary entries (:data:`SUMMARY_FLAGS`)."""
+        return dict(SUMMARY_FLAGS)
+
+    def summary(self) -> dict:
+        """The summary dictionary (keys in docs/discrete3d.md), with ``units``."""
+        s, res = self.case.system, self.solution
+        fc = s.critical_friction
+        fmax = float(np.max(s.friction))
+        return {
+            "model": "discrete3d",
+            "n_nodes": s.n_nodes,
+            "steady_state": res.steady_state,
+            "steady_state_class": SteadyState(res.steady_state).value,
+            "converged": res.steady_converged,
+            "residual": res.residual,
+            "cycles_run": res.cycles_run,
+            "dissipation_per_cycle": res.dissipation_per_cycle,
+            "dissipation_per_node": res.dissipation_per_node,
+            "dissipation_per_area": res.dissipation_per_node / s.area,
+            "work_of_loads_per_cycle": res.work_of_loads,
+            "energy_balance_error": res.energy_balance_error,
+            "slipping_nodes": res.slipping_nodes,
+            "permanently_stuck_nodes": res.permanently_stuck_nodes,
+            "separating_nodes": res.separating_nodes,
+            "separation": bool(res.separating_nodes),
+            "ratchet_per_cycle": (res.ratchet_per_cycle.reshape(-1, 2)
+                                  if res.steady_state == "ratcheting" else None),
+            "memory_erased": res.all_slip_or_separated,
+            "f_crit": _finite(fc.f_crit),
+            "f_crit_lower_bound": _finite(fc.lower_bound),
+            "f_crit_method": fc.method,
+            "friction_max": fmax,
+            "well_posed": bool(fmax < fc.f_crit),
+            "steps_last_cycle": int(res.steps_per_cycle_taken[-1]),
+            "refinements_last_cycle": int(res.refinements_per_cycle[-1]),
+            "unresolved_steps": int(res.unresolved_steps),
+            "newton_iterations": int(res.solver_stats.get("newton_iterations", 0)),
+            "wall_time_s": self.wall_time,
+            "units": dict(SUMMARY_UNITS),
+        }
+
+    def to_dataset(self) -> xr.Dataset:
+        """States, reactions and node states of every cycle, with the node coordinates
+        and frames (every variable has ``units`` and ``long_name``)."""
+        s, res = self.case.system, self.solution
+        n = s.n_nodes
+        c = res.x.shape[0]
+        S = len(res.theta)
+        loads = self.case.load(res.theta)
+        loads[-1] = loads[0]
+        v = res.x[:, :, :2 * n].reshape(c, S, n, 2)
+        q = res.r[:, :, :2 * n].reshape(c, S, n, 2)
+        stuck = np.zeros(n, np.int8)
+        stuck[res.permanently_stuck_nodes] = 1
+        d4 = ("cycle", "theta", "node", "component")
+        d3 = ("cycle", "theta", "node")
+
+        def var(dims, data, units, long_name, **extra):
+            return (dims, data, {"units": units, "long_name": long_name, **extra})
+
+        ds = xr.Dataset(
+            {
+                "slip": var(d4, v, "m", "tangential slip v (local t1, t2 components)"),
+                "slip_global": var(d3 + ("xyz",), np.einsum("ctna,nad->ctnd", v,
+                                                            s.tangents),
+                                   "m", "tangential slip v (global x, y, z components)"),
+                "separation": var(d3, res.x[:, :, 2 * n:], "m", "normal separation w"),
+                "tangential_reaction": var(d4, q, "N", "tangential reaction q"),
+                "normal_reaction": var(d3, res.r[:, :, 2 * n:], "N",
+                                       "normal reaction p (compressive > 0)"),
+                "friction_limit": var(d3, s.friction * res.r[:, :, 2 * n:], "N",
+                                      "friction limit f p"),
+                "node_state": var(d3, res.modes, "1",
+                                  "node state at the end of the step reaching the sample",
+                                  flag_values=np.arange(3, dtype=np.int8),
+                                  flag_meanings=" ".join(STATE_NAMES)),
+                "q_w": var(("theta", "node", "component"),
+                           loads[:, :2 * n].reshape(S, n, 2), "N", "tangential load q^w"),
+                "p_w": var(("theta", "node"), loads[:, 2 * n:], "N", "normal load p^w"),
+                "dissipation_per_node": var(("node",), res.dissipation_per_node, "J",
+                                            "dissipation D_j of the last cycle"),
+                "dissipation_per_area": var(("node",), res.dissipation_per_node / s.area,
+                                            "J m-2", "dissipation of the last cycle per "
+                                            "unit area"),
+                "dissipation_history": var(("cycle",), np.array(res.dissipation_history),
+                                           "J", "total dissipation of each cycle"),
+                "steps": var(("cycle",), np.array(res.steps_per_cycle_taken), "1",
+                             "load steps taken in each cycle"),
+                "slip_length": var(("node",), res.slip_length, "m",
+                                   "slip length over the last cycle"),
+                "permanently_stuck": var(("node",), stuck, "1",
+                                         "node stuck over the whole last cycle",
+                                         flag_values=np.array([0, 1], np.int8),
+                                         flag_meanings="slips_or_separates "
+                                                       "permanently_stuck"),
+                "area": var(("node",), s.area, "m2", "node area"),
+                "friction": var(("node",), s.friction, "1", "friction coefficient f"),
+                "normal": var(("node", "xyz"), s.normals, "1", "unit normal n"),
+                "tangent": var(("node", "component", "xyz"), s.tangents, "1",
+                               "unit tangents t1, t2"),
+            },
+            coords={
+                "cycle": ("cycle", np.arange(1, c + 1), {"units": "1",
+                                                         "long_name": "cycle"}),
+                "theta": ("theta", res.theta, {"units": "rad", "long_name": "cycle angle"}),
+                "node": ("node", np.arange(n), {"units": "1", "long_name": "node (from 0)"}),
+                "component": ("component", ["t1", "t2"], {"units": "1",
+                                                          "long_name": "tangent direction"}),
+                "xyz": ("xyz", ["x", "y", "z"], {"units": "1",
+                                                 "long_name": "global axis"}),
+                "x": ("node", s.coordinates[:, 0], {"units": "m",
+                                                    "long_name": "node coordinate x"}),
+                "y": ("node", s.coordinates[:, 1], {"units": "m",
+                                                    "long_name": "node coordinate y"}),
+                "z": ("node", s.coordinates[:, 2], {"units": "m",
+                                                    "long_name": "node coordinate z"}),
+            },
+        )
+        ds.attrs["slip_tolerance"] = float(res.slip_tolerance)
+        ds.attrs["slip_tolerance_units"] = "m"
+        ds.attrs["node_numbering"] = "from 0 (node j: rows 2j, 2j+1 of A, row j of B and C)"
+        return ds
+
+    def figures(self, dataset: xr.Dataset | None = None) -> dict:
+        """``interface_states``, ``dissipation_map``, ``slip_directions``,
+        ``dissipation_history``."""
+        from slipcycle.plot import interface3d as plots  # matplotlib only for figures
+
+        ds = self.to_dataset() if dataset is None else dataset
+        if ds.sizes["cycle"] == 0:
+            return {}
+        return {
+            "interface_states": lambda: plots.state_map(ds),
+            "dissipation_map": lambda: plots.dissipation_map(ds),
+            "slip_directions": lambda: plots.slip_directions(ds),
+            "dissipation_history": lambda: plots.dissipation_history(ds),
+        }
+
+    def write_fields(self, directory: str | Path, formats=None) -> list[Path]:
+        """Write the last cycle's contact fields for ParaView (XDMF and/or VTU series).
+
+        Parameters
+        ----------
+        directory : str or Path
+        formats : tuple of str, optional
+            ``"xdmf"``, ``"pvd"`` (default: the case's ``output.fields``).
+
+        Returns
+        -------
+        list of Path
+        """
+        res = self.solution
+        if res.x.shape[0] == 0:
+            return []
+        return write_fields(Path(directory), self.case.system, res.theta, res.x[-1],
+                            res.r[-1], res.modes[-1], res.dissipation_per_node,
+                            tuple(self.case.fields if formats is None else formats))
+
+    def to_outputs(self) -> RunOutputs:
+        """Summary, Dataset, figures, flags, and the field files under ``fields/``."""
+        out = super().to_outputs()
+        if self.case.fields and self.solution.x.shape[0]:
+            first = "interface.xdmf" if "xdmf" in self.case.fields else "interface.pvd"
+            out.extra_files[f"fields/{first}"] = lambda path: self.write_fields(path.parent)
+        return out
+
+
+def solve_model(dc, load: Load3D | None = None, run: Mapping | None = None, **kwargs
+                ) -> DiscreteResult3D:
+    """Solve a 3-D discrete system to its steady state.
+
+    Parameters
+    ----------
+    dc : Discrete3DCase or FrictionalSystem3D
+        A validated case, or a system (then ``load`` is required).
+    load : Load3D, optional
+    run : mapping, optional
+        Run settings for a system (:func:`discrete3d_case`).
+    **kwargs
+        ``initial_slip``, ``protocol``, ``fields`` of :func:`discrete3d_case`.
+
+    Returns
+    -------
+    DiscreteResult3D
+    """
+    if isinstance(dc, FrictionalSystem3D):
+        if load is None:
+            raise TypeError("a FrictionalSystem3D needs its load: (system, load[, run])")
+        dc = discrete3d_case(dc, load, run, **kwargs)
+    elif not isinstance(dc, Discrete3DCase) or load is not None or run or kwargs:
+        raise TypeError("expected a Discrete3DCase, or a FrictionalSystem3D with its load")
+    t0 = time.perf_counter()
+    res = simulate3d(dc.system, dc.load, initial_slip=dc.initial_slip, protocol=dc.protocol,
+                     **dc.run)
+    return DiscreteResult3D.from_solution(dc, res, time.perf_counter() - t0)
+
+
+def solve_case(case: Case) -> DiscreteResult3D:
+    """Validate a ``discrete3d`` case completely, then solve it."""
+    return solve_model(read_discrete3d_case(case))
+
+
+def run_case(case: Case) -> RunOutputs:
+    """``solve_case(case).to_outputs()``."""
+    return solve_case(case).to_outputs()

@@ -1,0 +1,79 @@
+"""Invariants of every load step of the 3-D solver (hypothesis over random systems and
+loads): the cone, contact complementarity, maximum dissipation, energy balance."""
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from slipcycle.discrete3d.evolution import Evolution3D
+from slipcycle.discrete3d.loads import Load3D
+from slipcycle.discrete3d.model import SEPARATED, SLIP, FrictionalSystem3D
+
+
+@st.composite
+def systems_and_loads(draw):
+    n = draw(st.integers(1, 3))
+    seed = draw(st.integers(0, 2**31 - 1))
+    rng = np.random.default_rng(seed)
+    M = rng.normal(size=(3 * n, 3 * n))
+    K = M @ M.T / (3 * n) + np.diag(rng.uniform(0.5, 2.0, 3 * n))
+    coupling = draw(st.sampled_from([0.0, 0.3, 0.8]))
+    A, B, C = K[:2 * n, :2 * n], coupling * K[2 * n:, :2 * n], K[2 * n:, 2 * n:]
+    friction = draw(st.sampled_from([0.0, 0.1, 0.5, 1.0]))   # f = 0 is an edge
+    system = FrictionalSystem3D(A, B, C, rng.uniform(0.5, 1.0, n) * friction,
+                                accept_ill_posed=True)
+    p0 = rng.uniform(-0.2, 1.0, n)                  # tensile means open nodes
+    load = Load3D.harmonic(p0, rng.normal(size=2 * n) * 0.3, rng.uniform(0, 1.0, n),
+                           rng.uniform(0, 1.5, 2 * n), rng.uniform(0, 6, n),
+                           rng.uniform(0, 6, 2 * n))
+    return system, load
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(systems_and_loads(), st.booleans())
+def test_cone_contact_and_maximum_dissipation_hold_at_every_step(case, extrapolate):
+    """(e) At the end of every committed step: |q_j| ≤ f_j p_j, p ≥ 0, w ≥ 0, p w = 0, a
+    separated node carries q = 0, and a slipping node's slip increment is opposite to its
+    tangential reaction with q at the cone, −q·Δv = f p |Δv| (maximum dissipation; to
+    the Newton tolerance (1e-7) for backward-Euler steps, within 2 % for
+    Richardson-extrapolated smooth steps, whose direction turns by O(h²) in the step);
+    over the path the stored energy changes by W − ΣD + normal work (discrete identity)."""
+    system, load = case
+    n = system.n_nodes
+    theta, vals = load.cycle_samples(24)
+    F = float(np.max(np.abs(vals)))
+    evo = Evolution3D(system, np.zeros(3 * n), vals[0] * 0, F, step_tol=1e-6,
+                      extrapolate=extrapolate)
+    evo.step_log = []
+    path = np.vstack([np.zeros(3 * n), vals])
+    totals = evo.follow(np.arange(len(path), dtype=float), path)
+    ftol = 1e-8 * F
+    xtol = 1e-8 * evo.disp_scale
+    for x, r, modes, x_before in evo.step_log:
+        q = r[:2 * n].reshape(n, 2)
+        p = r[2 * n:]
+        w = x[2 * n:]
+        qn = np.linalg.norm(q, axis=1)
+        assert np.all(qn <= system.friction * p + ftol)
+        assert np.all(p >= -ftol) and np.all(w >= -xtol)
+        assert np.all(np.abs(p * w) <= ftol * xtol + 1e-8 * ftol * np.abs(w))
+        sep = modes == SEPARATED
+        assert np.all(qn[sep] <= ftol)
+        dv = (x[:2 * n] - x_before[:2 * n]).reshape(n, 2)
+        stick = ~sep & (modes != SLIP)
+        assert np.all(np.abs(dv[stick]) <= xtol)
+        slip = modes == SLIP
+        dvn = np.linalg.norm(dv[slip], axis=1)
+        lhs = -np.sum(q[slip] * dv[slip], axis=1)
+        fp = system.friction[slip] * p[slip]
+        # at the cone, and the slip increment within a small angle of −q (exactly −q for a
+        # backward-Euler step; extrapolated smooth steps turn it by O(h²) within the step)
+        assert np.allclose(np.linalg.norm(q[slip], axis=1), fp, rtol=1e-9, atol=ftol)
+        rtol = 2e-2 if extrapolate else 1e-7
+        assert np.all(lhs >= (1 - rtol) * fp * dvn - ftol * dvn)
+        assert np.all(lhs <= (1 + 1e-7) * fp * dvn + ftol * dvn)
+    x1 = evo.x
+    d_stored = 0.5 * x1 @ system.K @ x1 + vals[-1] @ x1
+    balance = totals.work - totals.dissipation.sum() + totals.normal_work - d_stored
+    assert abs(balance) <= 1e-9 * F * evo.disp_scale
+    assert np.all(totals.dissipation >= -1e-9 * F * evo.disp_scale)
