@@ -54,6 +54,7 @@ API_PACKAGES = {
     "slipcycle.halfspace": "Half-space contacts (Ciavarella–Jäger slider bed)",
     "slipcycle.discrete": "Coupled discrete frictional systems",
     "slipcycle.rods": "Two rods with a frictional interface",
+    "slipcycle.discrete3d": "Three-dimensional frictional interfaces (the Coulomb cone)",
     "slipcycle.fe": "Static reduction of finite-element models",
 }
 

@@ -101,8 +101,8 @@ def test_fixed_steps_converge_at_first_order_and_step_doubling_at_second():
     approaches second order (measured 1.75, 1.85 for 32…256 samples per cycle)."""
     sys1 = _single_node()
     th = np.linspace(0, 2 * np.pi, 17)[:-1]
-    polygon = Load3D(TabulatedLoad(th, np.column_stack([np.cos(th), np.sin(th)])),
-                     HarmonicLoad([1.0], [0.0], 0.0))
+    polygon = Load3D(q=TabulatedLoad(th, np.column_stack([np.cos(th), np.sin(th)])),
+                     p=HarmonicLoad([1.0], [0.0], 0.0))
 
     def order(values):
         diffs = np.abs(np.diff(values))

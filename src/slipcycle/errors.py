@@ -4,12 +4,12 @@
   matrix of a model, a file). ``key`` names what is at fault, ``problem`` says why. The
   command line prints ``error: <key>: <problem>`` on one line and exits with code 2.
   :class:`slipcycle.io.CaseError`, :class:`slipcycle.sweep.SweepError`,
-  :class:`slipcycle.io.matrices.StiffnessError` and
-  :class:`slipcycle.discrete.model.ModelError` are its kinds.
+  :class:`slipcycle.io.matrices.StiffnessError` and :class:`ModelError` (a model object,
+  with an optional remedy) are its kinds.
 - :class:`SolverError`: a valid model on which a solver could not proceed (exit code 3).
 """
 
-__all__ = ["InputError", "SolverError"]
+__all__ = ["InputError", "ModelError", "SolverError"]
 
 
 class InputError(ValueError):
@@ -19,6 +19,33 @@ class InputError(ValueError):
         self.key = key
         self.problem = problem
         super().__init__(f"{key}: {problem}" if key else problem)
+
+
+class ModelError(InputError):
+    """An invalid model object (the discrete models' matrices and parameters).
+
+    Parameters
+    ----------
+    name : str
+        The matrix or parameter at fault (``"A"``, ``"friction"``); also ``key``.
+    problem : str
+        What is wrong, in words.
+    remedy : (str, bool, str), optional
+        ``(field, value, purpose)``: setting another field would let the model through
+        (``accept_ill_posed``, ``True``, ``"run anyway"``). ``problem`` then ends with
+        ``Pass field=value to purpose``; :attr:`detail` is ``problem`` without it, so that
+        a case-file reader can name its own key instead
+        (:func:`slipcycle.io.case.case_error_of`).
+    """
+
+    def __init__(self, name: str, problem: str, *, remedy: tuple | None = None):
+        self.detail = problem
+        self.remedy = remedy
+        if remedy is not None:
+            field_name, value, purpose = remedy
+            problem = f"{problem}. Pass {field_name}={value!r} to {purpose}"
+        super().__init__(name, problem)
+        self.name = name
 
 
 class SolverError(RuntimeError):

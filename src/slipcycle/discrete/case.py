@@ -26,6 +26,8 @@ from slipcycle.discrete.steady import (
 )
 from slipcycle.discrete.wellposed import critical_friction
 from slipcycle.io import Case, CaseError, RunOutputs, Section
+from slipcycle.io.case import case_error_of
+from slipcycle.io.loads import time_function
 from slipcycle.loading import HarmonicLoad, TabulatedLoad
 from slipcycle.result import STEADY_STATES, RunResult, SteadyState
 
@@ -104,27 +106,6 @@ def _periodic(sec: Section, name: str, n: int, lam: float):
     return HarmonicLoad(mean, amp, phase, lam)
 
 
-def _time_function(sec: Section, lam: float):
-    """Scalar time function g(θ) = mean + λ g̃(θ) of a load case."""
-    mean = sec.float("mean", 0.0)
-    if sec.has("theta"):
-        theta = sec.array("theta", shape=(None,), ge=0.0, lt=2 * np.pi)
-        if theta.size < 2 or np.any(np.diff(theta) <= 0):
-            raise sec.error("theta", "must have at least 2 strictly increasing angles in "
-                                     "[0, 2π)")
-        vals = sec.array("values", shape=(theta.size,))
-        return TabulatedLoad(theta, vals[:, None], [mean], lam)
-    amp = np.atleast_1d(sec.array("amplitude", 0.0))
-    if amp.ndim != 1:
-        raise sec.error("amplitude", "must be a number or a list (one per harmonic)")
-    phase = np.atleast_1d(sec.array("phase", 0.0))
-    if phase.size == 1:
-        phase = np.full(amp.shape, float(phase[0]))
-    elif phase.shape != amp.shape:
-        raise sec.error("phase", f"must be a number or a list of {amp.size} phases")
-    return HarmonicLoad([mean], amp[:, None], phase[:, None], lam)
-
-
 #: per-node keys whose length states the number of nodes the case was written for
 _PER_NODE_KEYS = (("discrete", "initial_slip"), ("discrete", "friction"), ("loading", "p0"),
                   ("loading", "q0"), ("loading", "p1"), ("loading", "q1"))
@@ -180,20 +161,6 @@ def _initial_state_error(sec: Section, ld: Section, exc, r0: np.ndarray, n: int)
 
 #: fields of :class:`FrictionalSystem` that are keys of ``[discrete]`` of the same name
 _SYSTEM_KEYS = ("A", "B", "C", "friction", "accept_ill_posed", "f_crit_exact_max_nodes")
-
-
-def _case_error(exc: ModelError, keys: Mapping[str, str]) -> CaseError:
-    """The model's error under the case-file key of its field (``keys``: field → key).
-
-    A remedy that names another field (``accept_ill_posed=True``) is said with its key
-    and TOML value (``discrete.accept_ill_posed = true``).
-    """
-    problem = exc.problem
-    if exc.remedy is not None:
-        field, value, purpose = exc.remedy
-        toml_value = str(value).lower() if isinstance(value, bool) else repr(value)
-        problem = f"{exc.detail}. Set {keys.get(field, field)} = {toml_value} to {purpose}"
-    return CaseError(keys.get(exc.name, exc.name), problem)
 
 
 def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
@@ -252,7 +219,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
         else:
             pvec = cs.array("p", np.zeros(n), shape=(n,))
             qvec = cs.array("q", np.zeros(n), shape=(n,))
-        cases.append(LoadCase(pvec, qvec, _time_function(cs, lam)))
+        cases.append(LoadCase(pvec, qvec, time_function(cs, lam)))
         cs.finish()
     load = DiscreteLoad(p_load, q_load, tuple(cases))
 
@@ -286,7 +253,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
         system = FrictionalSystem(mats["A"], mats["B"], mats["C"], friction,
                                   accept_ill_posed=accept, f_crit_exact_max_nodes=exact_max)
     except ModelError as exc:
-        raise _case_error(exc, {**{k: sec.key(k) for k in _SYSTEM_KEYS}, **mkeys}) from None
+        raise case_error_of(exc, {**{k: sec.key(k) for k in _SYSTEM_KEYS}, **mkeys}) from None
     fc = system.critical_friction
     if init is not None:
         r0 = load(np.array([0.0]))[0]

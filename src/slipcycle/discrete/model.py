@@ -21,7 +21,7 @@ from functools import cached_property
 
 import numpy as np
 
-from slipcycle.errors import InputError
+from slipcycle.errors import ModelError
 
 __all__ = ["FrictionalSystem", "ModelError", "STICK", "SLIP_POS", "SLIP_NEG", "SEPARATED",
            "STATE_NAMES"]
@@ -32,32 +32,6 @@ STATE_NAMES = ("stick", "slip_positive", "slip_negative", "separated")
 
 #: largest ``f_crit_exact_max_nodes``: the exact enumeration visits (3^N − 1)/2 pairs
 _EXACT_MAX_NODES = 14
-
-
-class ModelError(InputError):
-    """An invalid model.
-
-    Parameters
-    ----------
-    name : str
-        The matrix or parameter at fault (``"A"``, ``"friction"``); also ``key``.
-    problem : str
-        What is wrong, in words.
-    remedy : (str, bool, str), optional
-        ``(field, value, purpose)``: setting another field would let the model through
-        (``accept_ill_posed``, ``True``, ``"run anyway"``). ``problem`` then ends with
-        ``Pass field=value to purpose``; :attr:`detail` is ``problem`` without it, so that
-        a case-file reader can name its own key instead.
-    """
-
-    def __init__(self, name: str, problem: str, *, remedy: tuple | None = None):
-        self.detail = problem
-        self.remedy = remedy
-        if remedy is not None:
-            field_name, value, purpose = remedy
-            problem = f"{problem}. Pass {field_name}={value!r} to {purpose}"
-        super().__init__(name, problem)
-        self.name = name
 
 
 def _square(name: str, M, n: int | None) -> np.ndarray:

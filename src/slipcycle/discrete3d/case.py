@@ -27,7 +27,9 @@ from slipcycle.discrete3d.steady import (
     initial_state_3d,
     simulate3d,
 )
-from slipcycle.io import Case, CaseError, RunOutputs, Section
+from slipcycle.io import Case, RunOutputs, Section
+from slipcycle.io.case import case_error_of
+from slipcycle.io.loads import time_function
 from slipcycle.io.matrices import read_case_stiffness
 from slipcycle.loading import HarmonicLoad, TabulatedLoad
 from slipcycle.result import STEADY_STATES, RunResult, SteadyState
@@ -127,36 +129,6 @@ def _periodic(sec: Section, name: str, n: int, lam: float):
     return HarmonicLoad(mean, amp, ph, lam)
 
 
-def _time_function(sec: Section, lam: float):
-    """Scalar time function g(θ) = mean + λ g̃(θ) of a load case."""
-    mean = sec.float("mean", 0.0)
-    if sec.has("theta"):
-        theta = sec.array("theta", shape=(None,), ge=0.0, lt=2 * np.pi)
-        if theta.size < 2 or np.any(np.diff(theta) <= 0):
-            raise sec.error("theta", "must have at least 2 strictly increasing angles in "
-                                     "[0, 2π)")
-        vals = sec.array("values", shape=(theta.size,))
-        return TabulatedLoad(theta, vals[:, None], [mean], lam)
-    amp = np.atleast_1d(sec.array("amplitude", 0.0))
-    if amp.ndim != 1:
-        raise sec.error("amplitude", "must be a number or a list (one per harmonic)")
-    phase = np.atleast_1d(sec.array("phase", 0.0))
-    if phase.size == 1:
-        phase = np.full(amp.shape, float(phase[0]))
-    elif phase.shape != amp.shape:
-        raise sec.error("phase", f"must be a number or a list of {amp.size} phases")
-    return HarmonicLoad([mean], amp[:, None], phase[:, None], lam)
-
-
-def _case_error(exc: ModelError3D, keys: Mapping[str, str]) -> CaseError:
-    problem = exc.problem
-    if exc.remedy is not None:
-        field, value, purpose = exc.remedy
-        toml_value = str(value).lower() if isinstance(value, bool) else repr(value)
-        problem = f"{exc.detail}. Set {keys.get(field, field)} = {toml_value} to {purpose}"
-    return CaseError(keys.get(exc.name, exc.name), problem)
-
-
 def read_discrete3d_case(case: Case) -> Discrete3DCase:
     """Read and validate every key of a ``discrete3d`` case; no computation beyond checks.
 
@@ -212,9 +184,9 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
         else:
             pvec = cs.array("p", np.zeros(n), shape=(n,))
             qvec = _per_node2(cs, "q", n, np.zeros((n, 2)))
-        cases.append(LoadCase3D(qvec, pvec, _time_function(cs, lam)))
+        cases.append(LoadCase3D(p=pvec, q=qvec, time=time_function(cs, lam)))
         cs.finish()
-    load = Load3D(q_load, p_load, tuple(cases))
+    load = Load3D(p=p_load, q=q_load, cases=tuple(cases))
 
     rn = case.section("run", required=False)
     run = {
@@ -242,7 +214,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     except ModelError3D as exc:
         keys = {**{k: sec.key(k) for k in ("friction", "accept_ill_posed", "coordinates",
                                            "area")}, **mkeys}
-        raise _case_error(exc, keys) from None
+        raise case_error_of(exc, keys) from None
     if init is not None:
         r0 = load(np.array([0.0]))[0]
         F = max(float(np.max(np.abs(load.cycle_samples(run["steps_per_cycle"])[1]))), 1e-300)

@@ -31,7 +31,7 @@ from functools import cached_property
 import numpy as np
 
 from slipcycle.discrete3d.wellposed import critical_friction_3d
-from slipcycle.errors import InputError
+from slipcycle.errors import ModelError
 
 __all__ = ["FrictionalSystem3D", "ModelError3D", "STICK", "SLIP", "SEPARATED", "STATE_NAMES",
            "embed_2d"]
@@ -41,28 +41,10 @@ STICK, SLIP, SEPARATED = 0, 1, 2
 STATE_NAMES = ("stick", "slip", "separated")
 
 
-class ModelError3D(InputError):
-    """An invalid 3-D model; ``key`` names the matrix or parameter at fault.
-
-    Parameters
-    ----------
-    name : str
-        ``"A"``, ``"B"``, ``"C"``, ``"friction"``, ``"coordinates"``, ...
-    problem : str
-        What is wrong.
-    remedy : (str, bool, str), optional
-        ``(field, value, purpose)`` as for the 2-D model's error: another field that lets
-        the model through. ``detail`` is ``problem`` without the remedy sentence.
-    """
-
-    def __init__(self, name: str, problem: str, *, remedy: tuple | None = None):
-        self.detail = problem
-        self.remedy = remedy
-        if remedy is not None:
-            field_name, value, purpose = remedy
-            problem = f"{problem}. Pass {field_name}={value!r} to {purpose}"
-        super().__init__(name, problem)
-        self.name = name
+class ModelError3D(ModelError):
+    """An invalid 3-D model; ``key`` names the matrix or parameter at fault (``"A"``,
+    ``"B"``, ``"C"``, ``"friction"``, ``"coordinates"``, ...), with the optional remedy
+    of :class:`slipcycle.errors.ModelError`."""
 
 
 def _matrix(name: str, M, shape: tuple) -> np.ndarray:

@@ -398,3 +398,18 @@ def read_case(path: str | Path, models: Sequence[str] | None = None) -> Case:
     path = Path(path)
     text = read_text_file(path)
     return parse_case_text(text, path.resolve(), models)
+
+
+def case_error_of(exc, keys) -> CaseError:
+    """A model object's :class:`slipcycle.errors.ModelError` under the case-file key of its
+    field (``keys``: field → key).
+
+    A remedy that names another field (``accept_ill_posed=True``) is said with its key
+    and TOML value (``discrete.accept_ill_posed = true``).
+    """
+    problem = exc.problem
+    if exc.remedy is not None:
+        field, value, purpose = exc.remedy
+        toml_value = str(value).lower() if isinstance(value, bool) else repr(value)
+        problem = f"{exc.detail}. Set {keys.get(field, field)} = {toml_value} to {purpose}"
+    return CaseError(keys.get(exc.name, exc.name), problem)
