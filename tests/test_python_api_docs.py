@@ -7,7 +7,8 @@ import inspect
 
 import pytest
 
-PACKAGES = ("slipcycle.halfspace", "slipcycle.discrete", "slipcycle.rods", "slipcycle.fe")
+PACKAGES = ("slipcycle.halfspace", "slipcycle.discrete", "slipcycle.rods", "slipcycle.fe",
+            "slipcycle.discrete3d")
 
 
 def _public(pkg):

@@ -65,6 +65,25 @@ def random_starts(system: FrictionalSystem3D, load: Load3D, count: int, scale: f
     """``count`` initial slips (count, N, 2) [m] admissible at θ = 0, uniform in
     [−scale, scale] per component, by rejection.
 
+    Parameters
+    ----------
+    system : FrictionalSystem3D
+    load : Load3D
+        The loads; the starts must satisfy the cone at θ = 0.
+    count : int
+        Number of starts wanted.
+    scale : float
+        Half-width of the uniform draw of each slip component, m.
+    seed : int
+        Seed of the random generator (the same seed gives the same starts).
+    max_tries : int
+        Draws allowed before giving up.
+
+    Returns
+    -------
+    numpy.ndarray, shape (count, N, 2)
+        Admissible initial slips, m.
+
     Raises
     ------
     ValueError

@@ -42,9 +42,18 @@ STATE_NAMES = ("stick", "slip", "separated")
 
 
 class ModelError3D(ModelError):
-    """An invalid 3-D model; ``key`` names the matrix or parameter at fault (``"A"``,
-    ``"B"``, ``"C"``, ``"friction"``, ``"coordinates"``, ...), with the optional remedy
-    of :class:`slipcycle.errors.ModelError`."""
+    """An invalid 3-D model, with the optional remedy of :class:`slipcycle.errors.ModelError`.
+
+    Parameters
+    ----------
+    name : str
+        The matrix or parameter at fault (``"A"``, ``"B"``, ``"C"``, ``"friction"``,
+        ``"coordinates"``, ...); also ``key``.
+    problem : str
+        What is wrong, in words.
+    remedy : (str, bool, str), optional
+        ``(field, value, purpose)``: another field that lets the model through.
+    """
 
 
 def _matrix(name: str, M, shape: tuple) -> np.ndarray:
@@ -241,6 +250,15 @@ def embed_2d(A2, B2, C2, friction, *, accept_ill_posed: bool = True) -> Friction
 
     With loads along t1 only, every t2 slip and reaction stays zero and the cone reduces
     to |q_j| ≤ f p_j of the 2-D model (the special case of one tangential direction).
+
+    Parameters
+    ----------
+    A2, B2, C2 : (N, N) arrays
+        The 2-D model's blocks, N/m.
+    friction : float or (N,) array
+        Friction coefficients.
+    accept_ill_posed : bool
+        As :class:`FrictionalSystem3D`.
 
     Returns
     -------
