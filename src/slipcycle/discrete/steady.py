@@ -281,18 +281,7 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     scale_vals = vals if protocol is None else np.vstack([vals, protocol])
     F = _force_scale(scale_vals)
     disp_scale = F / float(np.max(np.diag(system.K)))
-    if initial_slip is not None:
-        x0 = initial_state(system, vals[0], initial_slip, 1e-10 * F)
-        evo = Evolution(system, x0, vals[0], F)
-    else:
-        evo = Evolution(system, np.zeros(2 * n), np.zeros(2 * n), F)
-        path = [np.zeros(2 * n)]
-        if protocol is not None:
-            path += list(np.atleast_2d(protocol))
-        path.append(vals[0])
-        path = np.array(path)
-        evo.follow(np.arange(len(path), dtype=float), path)
-        evo.resync()
+    evo = _assembled(system, vals[0], F, initial_slip, protocol)
     x_init = evo.x.copy()
     starts = [evo.x.copy()]
     xs, rs, ms, events, diss_hist = [], [], [], [], []
@@ -395,6 +384,35 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
             estimate = None
         wait = max(wait - 1, 0)
         moving_prev = moving
+    return _steady_result(system, evo, state, residual, ratchet, totals, starts, events,
+                          diss_hist, (xs, rs, ms) if record else None, theta, vals, tol,
+                          disp_scale, F, x_init, jstats)
+
+
+
+def _assembled(system: FrictionalSystem, r0: np.ndarray, F: float,
+               initial_slip: np.ndarray | None, protocol: np.ndarray | None) -> Evolution:
+    """The evolution at θ = 0: from an admissible initial slip, or assembled from the
+    unloaded state along the protocol's load states (linearly) to the load at θ = 0."""
+    n = system.n_nodes
+    if initial_slip is not None:
+        x0 = initial_state(system, r0, initial_slip, 1e-10 * F)
+        return Evolution(system, x0, r0, F)
+    evo = Evolution(system, np.zeros(2 * n), np.zeros(2 * n), F)
+    path = [np.zeros(2 * n)]
+    if protocol is not None:
+        path += list(np.atleast_2d(protocol))
+    path.append(r0)
+    path = np.array(path)
+    evo.follow(np.arange(len(path), dtype=float), path)
+    evo.resync()
+    return evo
+
+
+def _steady_result(system, evo, state, residual, ratchet, totals, starts, events, diss_hist,
+                   records, theta, vals, tol, disp_scale, F, x_init, jstats) -> SteadyResult:
+    """Classify the last cycle (stuck, slipping and separating nodes) and pack the run."""
+    n = system.n_nodes
     slip_tol = max(100 * tol, 1e-9) * max(disp_scale, float(np.max(np.abs(starts[-1]))))
     slipping = np.flatnonzero(totals.slip_length > slip_tol)
     separating = np.flatnonzero(totals.separated)
@@ -406,8 +424,8 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     x0, x1 = starts[-2], starts[-1]
     K = system.K
     d_stored = float(0.5 * (x1 @ K @ x1 - x0 @ K @ x0) + vals[0] @ (x1 - x0))
-    if record and xs:
-        X, R, Mo = np.array(xs), np.array(rs), np.array(ms)
+    if records is not None and records[0]:
+        X, R, Mo = (np.array(a) for a in records)
     else:
         X = R = np.zeros((0, len(theta), 2 * n))
         Mo = np.zeros((0, len(theta), n), np.int8)
@@ -421,4 +439,3 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         disp_scale=disp_scale, solver_stats={**evo.solver.stats, **jstats},
         dissipation_history=diss_hist, initial_state=x_init, stored_energy_change=d_stored,
         force_scale=F, slip_length=totals.slip_length.copy(), slip_tolerance=slip_tol)
-
