@@ -26,7 +26,7 @@ from slipcycle.discrete.steady import (
 )
 from slipcycle.discrete.wellposed import critical_friction
 from slipcycle.io import Case, CaseError, RunOutputs, Section
-from slipcycle.io.case import case_error_of
+from slipcycle.io.case import case_error_of, read_steady_tol
 from slipcycle.io.loads import time_function
 from slipcycle.loading import HarmonicLoad, TabulatedLoad
 from slipcycle.result import STEADY_STATES, RunResult, SteadyState
@@ -224,14 +224,10 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     load = DiscreteLoad(p_load, q_load, tuple(cases))
 
     rn = case.section("run", required=False)
-    # `steady_tol`, as in every model; `tolerance` is its older name in discrete cases
-    if rn.has("tolerance") and rn.has("steady_tol"):
-        raise rn.error("tolerance", "give steady_tol (or its older name tolerance), not both")
     run = {
         "cycles": rn.int("cycles", 40, ge=1),
         "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1),
-        "tol": rn.float("tolerance" if rn.has("tolerance") else "steady_tol", 1e-8,
-                        gt=0.0, lt=1.0),
+        "tol": read_steady_tol(rn, 1e-8),
         "min_cycles": rn.int("min_cycles", 1, ge=1),
     }
     case.finish()

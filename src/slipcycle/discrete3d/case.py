@@ -28,7 +28,7 @@ from slipcycle.discrete3d.steady import (
     simulate3d,
 )
 from slipcycle.io import Case, RunOutputs, Section
-from slipcycle.io.case import case_error_of
+from slipcycle.io.case import case_error_of, read_steady_tol
 from slipcycle.io.loads import time_function
 from slipcycle.io.matrices import read_case_stiffness
 from slipcycle.loading import HarmonicLoad, TabulatedLoad
@@ -192,7 +192,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     run = {
         "cycles": rn.int("cycles", 40, ge=1),
         "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1),
-        "tol": rn.float("tolerance", 1e-8, gt=0.0, lt=1.0),
+        "tol": read_steady_tol(rn, 1e-8),
         "min_cycles": rn.int("min_cycles", 1, ge=1),
         "step_tol": rn.float("step_tolerance", 1e-7, gt=0.0, lt=1.0),
     }
@@ -247,7 +247,7 @@ def discrete3d_case(system: FrictionalSystem3D, load: Load3D, run: Mapping | Non
     """
     settings = dict(RUN_DEFAULTS)
     for key, value in dict(run or {}).items():
-        key = "tol" if key == "tolerance" else key
+        key = "tol" if key in ("steady_tol", "tolerance") else key
         if key not in RUN_DEFAULTS:
             raise TypeError(f"unknown run setting {key!r} (known: {', '.join(RUN_DEFAULTS)})")
         settings[key] = value

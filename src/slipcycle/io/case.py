@@ -413,3 +413,15 @@ def case_error_of(exc, keys) -> CaseError:
         toml_value = str(value).lower() if isinstance(value, bool) else repr(value)
         problem = f"{exc.detail}. Set {keys.get(field, field)} = {toml_value} to {purpose}"
     return CaseError(keys.get(exc.name, exc.name), problem)
+
+
+def read_steady_tol(sec: Section, default: float) -> float:
+    """``steady_tol`` of a ``[run]`` table (the relative steady-state test, in (0, 1)).
+
+    ``tolerance`` is its older name in the discrete models' cases (read, same meaning);
+    both at once are refused.
+    """
+    if sec.has("tolerance") and sec.has("steady_tol"):
+        raise sec.error("tolerance", "give steady_tol (or its older name tolerance), not both")
+    return sec.float("tolerance" if sec.has("tolerance") else "steady_tol", default,
+                     gt=0.0, lt=1.0)
