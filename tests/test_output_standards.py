@@ -29,6 +29,7 @@ from slipcycle.io.metadata import CONVENTIONS, DEPENDENCIES, cf_problems
 
 jsonschema = pytest.importorskip("jsonschema", reason="needs the jsonschema package")
 
+from slipcycle.examples import copy_examples  # noqa: E402
 from slipcycle.io.schema import load_schema  # noqa: E402
 
 
@@ -48,6 +49,13 @@ CASES = {
                        ("num = 37", "num = 5"), ("steps_per_cycle = 200", "steps_per_cycle = 40"),
                        ("sliders = 100", "sliders = 30")),
     "limits.toml": _small("rods_limits_equal"),
+    "three.toml": _small("discrete3d_three_node", ("steps_per_cycle = 100",
+                                                    "steps_per_cycle = 40")),
+    "rough.toml": _small("halfspace_topography", ("bem_grid = 128", "bem_grid = 32"),
+                         ("grids = [32, 64, 128, 256]", "grids = [16, 32]"),
+                         ("sliders = [100, 200, 400, 800]", "sliders = [50, 100]"),
+                         ("sliders = 400", "sliders = 100"), ("num = 9}", "num = 3}"),
+                         ("rings = 16", "rings = 4")),
 }
 
 COMMANDS = {
@@ -60,6 +68,8 @@ COMMANDS = {
     "basins": ["basins", "two.toml", "--grid", "3", "--workers", "1"],
     "map": ["map", "map.toml"],
     "limits": ["limits", "limits.toml", "--no-maps"],
+    "run-discrete3d": ["run", "three.toml"],
+    "roughness": ["roughness", "rough.toml"],
 }
 
 
@@ -71,6 +81,9 @@ def outputs(tmp_path_factory):
     work = tmp_path_factory.mktemp("outputs")
     for name, text in CASES.items():
         (work / name).write_text(text)
+    copy_examples(work / "data", ["halfspace_topography"])  # the topography it reads
+    (work / "rough.toml").write_text(CASES["rough.toml"].replace(
+        '"rough_surface.nc"', f'"{work / "data" / "rough_surface.nc"}"'))
     cwd = os.getcwd()
     dirs = {}
     try:
