@@ -9,7 +9,7 @@
 - :class:`SolverError`: a valid model on which a solver could not proceed (exit code 3).
 """
 
-__all__ = ["InputError", "ModelError", "SolverError"]
+__all__ = ["InputError", "ModelError", "SolverError", "InadmissibleInitialState"]
 
 
 class InputError(ValueError):
@@ -51,3 +51,15 @@ class ModelError(InputError):
 class SolverError(RuntimeError):
     """A valid model on which a solver could not proceed (e.g. an accepted ill-posed
     rate problem that has no solution). The CLI reports it as one line, exit code 3."""
+
+
+class InadmissibleInitialState(ValueError):
+    """An initial slip state that violates a friction or contact inequality at θ = 0
+    (discrete models): ``node``, its ``margin`` (N; f p − |q|, or the contact margin) and
+    whether the node is open (``separated``: w > 0 at θ = 0, so it carries no reaction)."""
+
+    def __init__(self, node: int, margin: float, what: str, separated: bool = False):
+        self.node = node
+        self.margin = margin
+        self.separated = separated
+        super().__init__(f"node {node} {what} (margin {margin:.6g} N)")

@@ -32,6 +32,7 @@ from slipcycle.discrete.lcp import lemke
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.periodic import cycle_jacobian, periodic_step, stays_one_way
+from slipcycle.errors import InadmissibleInitialState
 
 __all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
            "STEADY_CLASSES", "STEADY_CODES", "ACCELERATE_MIN_NODES"]
@@ -104,17 +105,6 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
     bad = np.where(open_, (np.abs(q) > ftol) | (np.abs(p) > ftol),
                    (np.abs(q) > system.friction * p + ftol) | (p < -ftol)) | (w < -dtol)
     return None if bad.any() else target
-
-
-class InadmissibleInitialState(ValueError):
-    """The initial slip violates a friction or contact inequality at θ = 0."""
-
-    def __init__(self, node: int, margin: float, what: str, separated: bool = False):
-        self.node = node
-        self.margin = margin
-        #: the node is open (w > 0) at θ = 0, so it cannot carry the tangential reaction
-        self.separated = separated
-        super().__init__(f"node {node} {what} (margin {margin:.6g} N)")
 
 
 @dataclass

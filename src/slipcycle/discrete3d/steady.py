@@ -20,6 +20,7 @@ from scipy.optimize import nnls
 from slipcycle.discrete3d.evolution import Evolution3D
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
+from slipcycle.errors import InadmissibleInitialState
 
 __all__ = ["SteadyResult3D", "simulate3d", "initial_state_3d", "InadmissibleInitialState3D",
            "STEADY_CLASSES"]
@@ -27,14 +28,8 @@ __all__ = ["SteadyResult3D", "simulate3d", "initial_state_3d", "InadmissibleInit
 STEADY_CLASSES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged")
 
 
-class InadmissibleInitialState3D(ValueError):
+class InadmissibleInitialState3D(InadmissibleInitialState):
     """The initial slip violates the cone or contact at θ = 0 (node, margin f p − |q|)."""
-
-    def __init__(self, node: int, margin: float, what: str, separated: bool = False):
-        self.node = node
-        self.margin = margin
-        self.separated = separated
-        super().__init__(f"node {node} {what} (margin {margin:.6g} N)")
 
 
 @dataclass
