@@ -33,6 +33,7 @@ from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.periodic import cycle_jacobian, periodic_step, stays_one_way
 from slipcycle.errors import InadmissibleInitialState
+from slipcycle.loading.nodal import force_scale
 
 __all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
            "STEADY_CLASSES", "STEADY_CODES", "ACCELERATE_MIN_NODES"]
@@ -220,11 +221,6 @@ def initial_state(system: FrictionalSystem, r_w: np.ndarray, v0: np.ndarray,
     return x
 
 
-def _force_scale(values: np.ndarray) -> float:
-    s = float(np.max(np.abs(values), initial=0.0))
-    return s if s > 0 else 1.0
-
-
 def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
              steps_per_cycle: int = 100, initial_slip: np.ndarray | None = None,
              protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,
@@ -269,7 +265,7 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     n = system.n_nodes
     theta, vals = load.cycle_samples(steps_per_cycle)
     scale_vals = vals if protocol is None else np.vstack([vals, protocol])
-    F = _force_scale(scale_vals)
+    F = force_scale(scale_vals)
     disp_scale = F / float(np.max(np.diag(system.K)))
     evo = _assembled(system, vals[0], F, initial_slip, protocol)
     x_init = evo.x.copy()

@@ -21,6 +21,7 @@ from slipcycle.discrete3d.evolution import Evolution3D
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
 from slipcycle.errors import InadmissibleInitialState
+from slipcycle.loading.nodal import force_scale
 
 __all__ = ["SteadyResult3D", "simulate3d", "initial_state_3d", "InadmissibleInitialState3D",
            "STEADY_CLASSES"]
@@ -138,11 +139,6 @@ def initial_state_3d(system: FrictionalSystem3D, r_w: np.ndarray, v0: np.ndarray
     return x
 
 
-def _force_scale(values: np.ndarray) -> float:
-    s = float(np.max(np.abs(values), initial=0.0))
-    return s if s > 0 else 1.0
-
-
 def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                steps_per_cycle: int = 100, initial_slip: np.ndarray | None = None,
                protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,
@@ -181,7 +177,7 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     """
     n = system.n_nodes
     theta, vals = load.cycle_samples(steps_per_cycle)
-    F = _force_scale(vals if protocol is None else np.vstack([vals, protocol]))
+    F = force_scale(vals if protocol is None else np.vstack([vals, protocol]))
     disp_scale = F / system.stiffness_scale()
     opts = {"step_tol": step_tol, "adaptive": adaptive, "substeps": substeps,
             "extrapolate": extrapolate}

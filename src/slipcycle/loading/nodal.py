@@ -23,7 +23,7 @@ import numpy as np
 
 from slipcycle.loading import HarmonicLoad, TabulatedLoad, cycle_angles
 
-__all__ = ["LoadCase", "DiscreteLoad"]
+__all__ = ["LoadCase", "DiscreteLoad", "force_scale"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -138,3 +138,13 @@ class DiscreteLoad:
         vals = self(th)
         vals[-1] = vals[0]
         return th, vals
+
+
+def force_scale(values: np.ndarray) -> float:
+    """The force scale of load samples: max |r^w| (N), or 1 when every sample is zero.
+
+    Tolerances of the discrete models' steady-state and admissibility tests are relative
+    to it.
+    """
+    s = float(np.max(np.abs(values), initial=0.0))
+    return s if s > 0 else 1.0
