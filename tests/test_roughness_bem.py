@@ -114,9 +114,11 @@ def test_short_and_long_filters_split_the_surface(cut, seed):
     that add up to it (every Fourier component is in exactly one)."""
     rng = np.random.default_rng(seed)
     s = SurfaceMap(rng.standard_normal((32, 32)) * 1e-6, (1e-3, 1e-3))
-    lam = cut * 1e-3
+    # both filters cut at the same value, set off the grid's wavelengths L/|k| so that a
+    # component at λ = L/10 cannot fall on either side by rounding (0.1·L ≠ L/10 in floats)
+    lam = cut * 1e-3 * (1 - 1e-12)
     low = filter_surface(s, short_cutoff=lam)
-    high = filter_surface(s, long_cutoff=lam * (1 - 1e-12))
+    high = filter_surface(s, long_cutoff=lam)
     np.testing.assert_allclose(low.heights + high.heights, s.heights, atol=1e-18)
     assert low.rms_height**2 + high.rms_height**2 == pytest.approx(s.rms_height**2,
                                                                    rel=1e-9)
