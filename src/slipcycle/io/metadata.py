@@ -13,7 +13,9 @@ version 1.10, 2022) before it is written, in one place for every command:
   else from the result's ``summary["units"]``, else ``"1"`` for integer, boolean and text
   variables (counts, codes and labels) — a floating-point variable with no unit anywhere
   is a gap the model must fill and is reported by :func:`cf_problems`;
-- ``flag_values``/``flag_meanings`` consistent for categorical codes (CF §3.5).
+- ``flag_values``/``flag_meanings`` consistent for categorical codes (CF §3.5);
+- text as fixed-length char arrays (a ``<name>_strlen`` dimension), never the
+  variable-length strings netCDF-4 writes by default (CF §2.2).
 
 :func:`cf_problems` checks these rules and returns what is missing (empty when the
 Dataset conforms); the writer logs its findings, and the tests hold every command to an
@@ -173,6 +175,17 @@ def cf_complete(ds: xr.Dataset, units: Mapping[str, str] | None = None,
     units = dict(units or {})
     flags = dict(flags or {})
     ds = ds.copy()
+    for dim in list(ds.dims):
+        if dim in ds.coords and _is_text(ds[dim].variable):
+            # a coordinate variable must be numeric (CF §5): index the dimension and keep
+            # its labels as an auxiliary coordinate "<dim>_name"
+            labels = ds[dim].values.astype(str)
+            attrs = dict(ds[dim].attrs)
+            ds = ds.assign_coords({
+                f"{dim}_name": (dim, labels, {**attrs, "long_name": attrs.get(
+                    "long_name", f"{_default_long_name(dim)} name"), "units": "1"}),
+                dim: (dim, np.arange(labels.size, dtype=np.int64),
+                      {"long_name": f"{_default_long_name(dim)} index", "units": "1"})})
     for dim, size in ds.sizes.items():
         if dim not in ds.coords and dim not in ds.data_vars:
             ds = ds.assign_coords({dim: (dim, np.arange(size, dtype=np.int64),
@@ -194,8 +207,24 @@ def cf_complete(ds: xr.Dataset, units: Mapping[str, str] | None = None,
                 attrs["units"] = "1"    # counts, codes, booleans and text
         if name in ds.dims:
             var.encoding["_FillValue"] = None      # coordinate variables have no fill
+        if _is_text(var):
+            # netCDF-4 would store text as variable-length strings, which CF checkers and
+            # netCDF-3 readers refuse (CF §2.2): store fixed-length char arrays instead
+            var.encoding["dtype"] = "S1"
+            var.encoding["char_dim_name"] = f"{name}_strlen"
+            var.encoding.pop("_FillValue", None)
     ds.attrs["Conventions"] = CONVENTIONS
     return ds
+
+
+def _is_text(var) -> bool:
+    """Whether an xarray Variable holds text (str/bytes, or objects that are all str)."""
+    kind = var.dtype.kind
+    if kind in "US":
+        return True
+    if kind == "O":
+        return all(isinstance(v, str | bytes) for v in var.values.ravel())
+    return False
 
 
 def cf_problems(ds: xr.Dataset) -> list[str]:
@@ -205,7 +234,8 @@ def cf_problems(ds: xr.Dataset) -> list[str]:
     digits and underscores (CF §2.3); a coordinate variable for every dimension, with no
     ``_FillValue`` (CF §5); ``long_name`` (or ``standard_name``) and ``units`` on every
     variable; ``flag_values`` of the variable's type and as many as the words of
-    ``flag_meanings`` (CF §3.5).
+    ``flag_meanings`` (CF §3.5); text as fixed-length char arrays, not variable-length
+    strings (CF §2.2).
 
     Parameters
     ----------
@@ -246,4 +276,8 @@ def cf_problems(ds: xr.Dataset) -> list[str]:
             if values.size and values.dtype.kind != ds[name].dtype.kind:
                 problems.append(f"{name}: flag_values of type {values.dtype}, variable of "
                                 f"type {ds[name].dtype}")
+        var = ds[name].variable
+        if _is_text(var) and np.dtype(var.encoding.get("dtype", object)) != np.dtype("S1"):
+            problems.append(f"{name}: text stored as variable-length strings, not as a "
+                            "char array (CF §2.2)")
     return problems
