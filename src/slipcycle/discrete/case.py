@@ -15,7 +15,7 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
-from slipcycle.discrete.loads import DiscreteLoad, LoadCase
+from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import STATE_NAMES, FrictionalSystem, ModelError
 from slipcycle.discrete.shakedown import extreme_constraints, safe_vertices
 from slipcycle.discrete.steady import (
@@ -26,9 +26,8 @@ from slipcycle.discrete.steady import (
 )
 from slipcycle.discrete.wellposed import critical_friction
 from slipcycle.io import Case, CaseError, RunOutputs, Section
-from slipcycle.io.case import case_error_of, read_steady_tol
-from slipcycle.io.loads import time_function
-from slipcycle.loading import HarmonicLoad, TabulatedLoad
+from slipcycle.io.case import case_error_of
+from slipcycle.io.loads import load_cases, periodic_load, protocol_states, run_settings
 from slipcycle.result import STEADY_STATES, RunResult, SteadyState
 
 __all__ = ["run_case", "read_discrete_case", "DiscreteCase", "DiscreteResult", "discrete_case",
@@ -70,40 +69,6 @@ def _matrices(sec: Section) -> tuple[dict, dict]:
     B = sec.array("B", shape=(n, n))
     C = sec.array("C", shape=(n, n))
     return {"A": A, "B": B, "C": C}, {k: sec.key(k) for k in ("A", "B", "C")}
-
-
-def _periodic(sec: Section, name: str, n: int, lam: float):
-    """Per-node load ``name`` (p or q): harmonic (name0, name1, name1_phase) or tabulated
-    (theta, name_table)."""
-    mean = sec.array(f"{name}0", np.zeros(n) if name == "q" else None, shape=(n,),
-                     scalar_ok=True)
-    if mean is None:
-        raise sec.error(f"{name}0", "required key is missing (mean normal load per node)")
-    table_key = f"{name}_table"
-    amp_key = f"{name}1"
-    if sec.has(table_key):
-        if sec.has(amp_key):
-            raise sec.error(amp_key, f"give either {amp_key} (harmonic) or {table_key} "
-                                     "(tabulated), not both")
-        theta = sec.array("theta", shape=(None,), ge=0.0, lt=2 * np.pi)
-        if theta.size < 2 or np.any(np.diff(theta) <= 0):
-            raise sec.error("theta", "must have at least 2 strictly increasing angles in "
-                                     "[0, 2π)")
-        vals = sec.array(table_key, shape=(theta.size, n))
-        return TabulatedLoad(theta, vals, mean, lam)
-    amp = sec.array(amp_key, np.zeros(n))
-    if amp.ndim == 1:
-        amp = sec.coerce_array(amp_key, amp, shape=(n,))[None, :]
-    else:
-        amp = sec.coerce_array(amp_key, amp, shape=(None, n))
-    phase = sec.array(f"{name}1_phase", 0.0)
-    if phase.ndim == 0:
-        phase = np.full(amp.shape, float(phase))
-    elif phase.ndim == 1 and amp.shape[0] == 1:
-        phase = sec.coerce_array(f"{name}1_phase", phase, shape=(n,))[None, :]
-    else:
-        phase = sec.coerce_array(f"{name}1_phase", phase, shape=amp.shape)
-    return HarmonicLoad(mean, amp, phase, lam)
 
 
 #: per-node keys whose length states the number of nodes the case was written for
@@ -184,52 +149,32 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     accept = sec.bool("accept_ill_posed", False)
     exact_max = sec.int("f_crit_exact_max_nodes", 10)
     init = sec.array("initial_slip", None, shape=(n,))
-    proto_secs = sec.tables("protocol", None)
-    if init is not None and proto_secs:
+    protocol = protocol_states(sec, n)
+    if init is not None and protocol is not None:
         raise sec.error("protocol", "give either initial_slip or an assembly protocol, "
                                     "not both")
-    protocol = None
-    if proto_secs:
-        states = []
-        for ps in proto_secs:
-            p = ps.array("p_w", shape=(n,), scalar_ok=True)
-            q = ps.array("q_w", np.zeros(n), shape=(n,), scalar_ok=True)
-            states.append(np.concatenate([q, p]))
-            ps.finish()
-        protocol = np.array(states)
 
     ld = case.section("loading")
     lam = ld.float("lam", 1.0, ge=0.0)
-    p_load = _periodic(ld, "p", n, lam)
-    q_load = _periodic(ld, "q", n, lam)
-    cases = []
-    for cs in ld.tables("load_case", None):
-        if cs.has("file_case"):
-            k = cs.int("file_case", ge=0)
-            if "p_w" not in mats or "q_w" not in mats:
-                raise cs.error("file_case", "the stiffness_file holds no load cases "
-                                            "(arrays p_w, q_w)")
-            pw = np.atleast_2d(mats["p_w"])
-            qw = np.atleast_2d(mats["q_w"])
-            if k >= pw.shape[0]:
-                raise cs.error("file_case", f"must be < {pw.shape[0]} (load cases in file)")
-            pvec, qvec = np.asarray(pw[k], float), np.asarray(qw[k], float)
-            if pvec.shape != (n,) or qvec.shape != (n,):
-                raise cs.error("file_case", f"load case vectors must have {n} entries")
-        else:
-            pvec = cs.array("p", np.zeros(n), shape=(n,))
-            qvec = cs.array("q", np.zeros(n), shape=(n,))
-        cases.append(LoadCase(pvec, qvec, time_function(cs, lam)))
-        cs.finish()
-    load = DiscreteLoad(p_load, q_load, tuple(cases))
 
+    def file_case(cs: Section):
+        k = cs.int("file_case", ge=0)
+        if "p_w" not in mats or "q_w" not in mats:
+            raise cs.error("file_case", "the stiffness_file holds no load cases "
+                                        "(arrays p_w, q_w)")
+        pw = np.atleast_2d(mats["p_w"])
+        qw = np.atleast_2d(mats["q_w"])
+        if k >= pw.shape[0]:
+            raise cs.error("file_case", f"must be < {pw.shape[0]} (load cases in file)")
+        pvec, qvec = np.asarray(pw[k], float), np.asarray(qw[k], float)
+        if pvec.shape != (n,) or qvec.shape != (n,):
+            raise cs.error("file_case", f"load case vectors must have {n} entries")
+        return pvec, qvec
+
+    load = DiscreteLoad(periodic_load(ld, "p", n, lam), periodic_load(ld, "q", n, lam),
+                        load_cases(ld, n, lam, 1, file_case))
     rn = case.section("run", required=False)
-    run = {
-        "cycles": rn.int("cycles", 40, ge=1),
-        "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1),
-        "tol": read_steady_tol(rn, 1e-8),
-        "min_cycles": rn.int("min_cycles", 1, ge=1),
-    }
+    run = run_settings(rn)
     case.finish()
 
     # -- sizes: refuse what cannot be allocated, before any work --------------------------

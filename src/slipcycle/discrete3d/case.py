@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from slipcycle.discrete3d.fields import write_fields
-from slipcycle.discrete3d.loads import Load3D, LoadCase3D
+from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import STATE_NAMES, FrictionalSystem3D, ModelError3D
 from slipcycle.discrete3d.steady import (
     STEADY_CLASSES,
@@ -28,10 +28,9 @@ from slipcycle.discrete3d.steady import (
     simulate3d,
 )
 from slipcycle.io import Case, RunOutputs, Section
-from slipcycle.io.case import case_error_of, read_steady_tol
-from slipcycle.io.loads import time_function
+from slipcycle.io.case import case_error_of
+from slipcycle.io.loads import load_cases, periodic_load, protocol_states, run_settings
 from slipcycle.io.matrices import read_case_stiffness
-from slipcycle.loading import HarmonicLoad, TabulatedLoad
 from slipcycle.result import STEADY_STATES, RunResult, SteadyState
 
 __all__ = ["Discrete3DCase", "DiscreteResult3D", "read_discrete3d_case", "discrete3d_case",
@@ -88,47 +87,6 @@ def _matrices(case: Case, sec: Section) -> tuple[dict, dict]:
              "loads": {}}, {k: sec.key(k) for k in ("A", "B", "C")})
 
 
-def _per_node2(sec: Section, key: str, n: int, default=None) -> np.ndarray | None:
-    """An (N, 2) per-node tangential vector (a bare number fills both components)."""
-    arr = sec.array(key, default, shape=(n, 2), scalar_ok=True)
-    return None if arr is None else arr.reshape(2 * n)
-
-
-def _periodic(sec: Section, name: str, n: int, lam: float):
-    """Load ``name`` (p: (N,), q: (N, 2) per value) harmonic or tabulated."""
-    shape = (n,) if name == "p" else (n, 2)
-    size = int(np.prod(shape))
-    mean = sec.array(f"{name}0", np.zeros(shape) if name == "q" else None, shape=shape,
-                     scalar_ok=True)
-    if mean is None:
-        raise sec.error(f"{name}0", "required key is missing (mean normal load per node)")
-    mean = mean.reshape(size)
-    table_key, amp_key = f"{name}_table", f"{name}1"
-    if sec.has(table_key):
-        if sec.has(amp_key):
-            raise sec.error(amp_key, f"give either {amp_key} (harmonic) or {table_key} "
-                                     "(tabulated), not both")
-        theta = sec.array("theta", shape=(None,), ge=0.0, lt=2 * np.pi)
-        if theta.size < 2 or np.any(np.diff(theta) <= 0):
-            raise sec.error("theta", "must have at least 2 strictly increasing angles in "
-                                     "[0, 2π)")
-        vals = sec.array(table_key, shape=(theta.size, *shape))
-        return TabulatedLoad(theta, vals.reshape(theta.size, size), mean, lam)
-    raw = sec.array(amp_key, np.zeros(shape))
-    amp = (sec.coerce_array(amp_key, raw, shape=shape)[None] if raw.ndim == len(shape)
-           else sec.coerce_array(amp_key, raw, shape=(None, *shape)))
-    amp = amp.reshape(-1, size)
-    ph = sec.array(f"{name}1_phase", 0.0)
-    if ph.ndim == 0:
-        ph = np.full(amp.shape, float(ph))
-    elif ph.ndim == len(shape) and amp.shape[0] == 1:
-        ph = sec.coerce_array(f"{name}1_phase", ph, shape=shape).reshape(1, size)
-    else:
-        ph = sec.coerce_array(f"{name}1_phase", ph,
-                              shape=(amp.shape[0], *shape)).reshape(amp.shape)
-    return HarmonicLoad(mean, amp, ph, lam)
-
-
 def read_discrete3d_case(case: Case) -> Discrete3DCase:
     """Read and validate every key of a ``discrete3d`` case; no computation beyond checks.
 
@@ -153,49 +111,28 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     coords = sec.array("coordinates", mats["coordinates"], shape=(n, 3))
     area = sec.array("area", 1.0, shape=(n,), scalar_ok=True, gt=0.0)
     init = sec.array("initial_slip", None, shape=(n, 2))
-    proto_secs = sec.tables("protocol", None)
-    if init is not None and proto_secs:
+    protocol = protocol_states(sec, n)
+    if init is not None and protocol is not None:
         raise sec.error("protocol", "give either initial_slip or an assembly protocol, "
                                     "not both")
-    protocol = None
-    if proto_secs:
-        states = []
-        for ps in proto_secs:
-            p = ps.array("p_w", shape=(n,), scalar_ok=True)
-            q = _per_node2(ps, "q_w", n, np.zeros((n, 2)))
-            states.append(np.concatenate([q, p]))
-            ps.finish()
-        protocol = np.array(states)
 
     ld = case.section("loading")
     lam = ld.float("lam", 1.0, ge=0.0)
-    p_load = _periodic(ld, "p", n, lam)
-    q_load = _periodic(ld, "q", n, lam)
-    cases = []
-    for cs in ld.tables("load_case", None):
-        if cs.has("file_case"):
-            name = cs.string("file_case")
-            if name not in mats["loads"]:
-                known = ", ".join(mats["loads"]) or "none"
-                raise cs.error("file_case", f"the stiffness_file has no load case {name!r} "
-                                            f"(it has: {known})")
-            qvec = np.asarray(mats["loads"][name]["q"], float)
-            pvec = np.asarray(mats["loads"][name]["p"], float)
-        else:
-            pvec = cs.array("p", np.zeros(n), shape=(n,))
-            qvec = _per_node2(cs, "q", n, np.zeros((n, 2)))
-        cases.append(LoadCase3D(p=pvec, q=qvec, time=time_function(cs, lam)))
-        cs.finish()
-    load = Load3D(p=p_load, q=q_load, cases=tuple(cases))
 
+    def file_case(cs: Section):
+        name = cs.string("file_case")
+        if name not in mats["loads"]:
+            known = ", ".join(mats["loads"]) or "none"
+            raise cs.error("file_case", f"the stiffness_file has no load case {name!r} "
+                                        f"(it has: {known})")
+        return (np.asarray(mats["loads"][name]["p"], float),
+                np.asarray(mats["loads"][name]["q"], float))
+
+    load = Load3D(p=periodic_load(ld, "p", n, lam, 2), q=periodic_load(ld, "q", n, lam, 2),
+                  cases=load_cases(ld, n, lam, 2, file_case))
     rn = case.section("run", required=False)
-    run = {
-        "cycles": rn.int("cycles", 40, ge=1),
-        "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1),
-        "tol": read_steady_tol(rn, 1e-8),
-        "min_cycles": rn.int("min_cycles", 1, ge=1),
-        "step_tol": rn.float("step_tolerance", 1e-7, gt=0.0, lt=1.0),
-    }
+    run = run_settings(rn, step_tol=("step_tolerance", lambda s, k: s.float(
+        k, 1e-7, gt=0.0, lt=1.0)))
     out = case.section("output", required=False)
     fields = out.data.get("fields", list(FIELD_FORMATS))
     if isinstance(fields, str):
