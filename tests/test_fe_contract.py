@@ -74,7 +74,8 @@ def test_reduction_contract_agrees_with_the_npz(run_cli, write_case, tmp_path):
         np.testing.assert_allclose(ds[name].values, data[name], rtol=1e-9, atol=1e-3)
     np.testing.assert_allclose(np.stack([ds["x"], ds["y"]], axis=1), data["coords"])
     assert ds["A"].attrs["units"] == "N/m" and ds["x"].attrs["units"] == "m"
-    assert list(ds["load_case"].values) == list(data["load_cases"])
+    # text labels of a dimension are CF auxiliary coordinates "<dim>_name" (io.metadata)
+    assert list(ds["load_case_name"].values) == list(data["load_cases"])
     s = red.summary()
     assert s["n_contact_nodes"] == data["A"].shape[0]
     assert s["coupling_B_over_A"] == pytest.approx(

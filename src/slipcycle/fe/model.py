@@ -21,7 +21,8 @@ from slipcycle.fe.loads import combined_loads
 from slipcycle.fe.reduction import Problem, ReducedModel
 from slipcycle.io.case import Case, CaseError, Section
 
-__all__ = ["GEOMETRIES", "build_problem", "discrete_case_text", "read_discrete_table"]
+__all__ = ["GEOMETRIES", "build_problem", "discrete_case_text", "read_discrete_table",
+           "read_convergence_table", "DEFAULT_REFINEMENTS"]
 
 GEOMETRIES = ("block_on_rigid", "two_blocks", "cylinder_on_block", "mesh")
 
@@ -61,6 +62,7 @@ def build_problem(case: Case) -> Problem:
     }
     _make(fe, Grid, width=1.0, contact_width=1.0, thickness=common["thickness"])
     read_discrete_table(fe)  # validate now, used after the reduction
+    read_convergence_table(fe, geometry)  # used by `slipcycle run` (slipcycle.joints)
     if geometry == "mesh":
         return _mesh_problem(fe, common, case)
     common["top"] = fe.string("top", "displacement", choices=("displacement",))
@@ -165,6 +167,34 @@ def read_discrete_table(fe: Section) -> dict | None:
         t.finish()
     sec.finish()
     return out
+
+
+#: refinements of ``elements`` that ``slipcycle run`` solves without ``[fe.convergence]``
+DEFAULT_REFINEMENTS = (1, 2, 4)
+
+
+def read_convergence_table(fe: Section, geometry: str) -> dict:
+    """Validate the optional ``[fe.convergence]`` table (mesh study of ``slipcycle run``).
+
+    Keys: ``refinements``, strictly increasing integers starting at 1 that multiply
+    ``elements`` (default :data:`DEFAULT_REFINEMENTS`; ``[1]`` solves the case's mesh
+    only; a mesh file cannot be refined, its default is ``[1]``), and ``rtol``, the
+    largest estimated relative error of the finest dissipation called mesh-converged
+    (default 0.05). Returns ``{"refinements": tuple of int, "rtol": float}``.
+    """
+    sec = fe.table("convergence", {})
+    default = (1,) if geometry == "mesh" else DEFAULT_REFINEMENTS
+    raw = sec.array("refinements", list(default), shape=(None,), ge=1)
+    if raw.size == 0 or raw[0] != 1 or np.any(raw != np.round(raw)) \
+            or np.any(np.diff(raw) <= 0):
+        raise sec.error("refinements", "must be strictly increasing integers starting at "
+                                       f"1 (e.g. [1, 2, 4]), got {raw.tolist()}")
+    if geometry == "mesh" and raw.size > 1:
+        raise sec.error("refinements", "a mesh file cannot be refined: give [1] and run "
+                                       "finer meshes of your own as separate cases")
+    rtol = sec.float("rtol", 0.05, gt=0, lt=1)
+    sec.finish()
+    return {"refinements": tuple(int(r) for r in raw), "rtol": rtol}
 
 
 def discrete_case_text(table: dict, reduced: ReducedModel, stiffness_file: str,

@@ -354,7 +354,8 @@ class SweepStore:
         out = {}
         for name, (_, dtype) in self.schema.items():
             arr = np.asarray(self.group[name][...])
-            out[name] = arr.astype(str) if _is_text(dtype) else arr
+            # via object: NumPy's variable-width StringDType casts to no fixed width
+            out[name] = arr.astype(object).astype(str) if _is_text(dtype) else arr
         return out
 
 
