@@ -2,8 +2,10 @@
 
 Rows: the time per cycle of a 2000-node system (6000 dofs, dense FE-like K; the target
 of 60 s to the steady state in ≤ 50 cycles of 100 load samples is 1.2 s per cycle on a
-2-core machine), and the cost per load-step solve against N (100 … 2000) with the
-fitted exponent.
+2-core machine), the full run to the steady state when a cycle is fast enough for it to
+take about a minute, and the cost per load-step solve against N (100 … 2000) with the
+fitted exponent. Times are CPU seconds (one BLAS thread), the quiet-machine estimate on a
+shared machine; the wall times are kept beside them (``wall_s``).
 
 The FE-like system is the 2-D benchmark's ``fe_like`` (bench_discrete.py) with two
 tangential directions per node: A = A₁ ⊗ [[1, 0.1], [0.1, 1]], B couples the normal
@@ -50,20 +52,23 @@ def case(n: int):
 
 
 def steady_time(n: int, cycles: int = 50, steps: int = 100, step_tol: float = 1e-4):
+    """(wall, CPU) seconds of a run to the steady state (at most ``cycles``) and its result.
+
+    CPU time (``time.process_time``, one BLAS thread) is the quiet-machine estimate on a
+    shared machine, where the wall time is inflated by the other processes."""
     system, load = case(n)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     res = simulate3d(system, load, cycles=cycles, steps_per_cycle=steps, tol=1e-6,
                      step_tol=step_tol, record=False)
-    return time.perf_counter() - t0, res
+    return time.perf_counter() - t0, time.process_time() - c0, res
 
 
-def step_cost(n: int, steps: int = 100, step_tol: float = 1e-4) -> float:
-    """Seconds per load-step solve (Newton solves of one cycle and its assembly)."""
-    system, load = case(n)
-    t0 = time.perf_counter()
-    res = simulate3d(system, load, cycles=1, steps_per_cycle=steps, tol=1e-6,
-                     step_tol=step_tol, record=False)
-    return (time.perf_counter() - t0) / max(1, res.solver_stats["solves"])
+def step_cost(n: int, steps: int = 100, step_tol: float = 1e-4) -> tuple[float, float]:
+    """(wall, CPU) seconds per load-step solve (Newton solves of one cycle and its
+    assembly)."""
+    wall, cpu, res = steady_time(n, cycles=1, steps=steps, step_tol=step_tol)
+    solves = max(1, res.solver_stats["solves"])
+    return wall / solves, cpu / solves
 
 
 def benchmarks() -> list[dict]:
@@ -72,24 +77,36 @@ def benchmarks() -> list[dict]:
         return _rows()
 
 
+#: the full run to the steady state is a row when one cycle takes less than this (CPU s):
+#: 50 cycles then fit in about a minute
+FULL_RUN_MAX_CYCLE = 1.3
+
+
 def _rows() -> list[dict]:
     rows = []
     sizes = [100, 200, 500, 1000, 2000]
+    step_cost(20)           # loads the compiled kernels, kept out of the first row
     costs = [step_cost(n) for n in sizes]
-    for n, c in zip(sizes, costs, strict=True):
-        rows.append({"name": f"discrete3d_step_cost_N{n}", "value": c, "unit": "s/step",
-                     "target": None, "ok": True})
-    slope = float(np.polyfit(np.log(sizes), np.log(costs), 1)[0])
+    for n, (wall, cpu) in zip(sizes, costs, strict=True):
+        rows.append({"name": f"discrete3d_step_cost_N{n}", "value": cpu, "unit": "CPU s/step",
+                     "target": None, "wall_s": wall})
+    slope = float(np.polyfit(np.log(sizes), np.log([c for _, c in costs]), 1)[0])
     rows.append({"name": "discrete3d_step_cost_exponent", "value": slope, "unit": "1",
                  "target": 2.0, "ok": slope <= 2.0})
-    # the full run to steady state (≤ 50 cycles) is too slow for a benchmark session at
-    # present: time three cycles and compare the per-cycle time with 60 s / 50 cycles
-    wall, res = steady_time(2000, cycles=3)
-    per_cycle = wall / max(res.cycles_run, 1)
+    # time per cycle from three cycles (assembly included: an upper bound), against
+    # 60 s / 50 cycles
+    wall, cpu, res = steady_time(2000, cycles=3)
+    per_cycle = cpu / max(res.cycles_run, 1)
     rows.append({"name": "discrete3d_2000_nodes_time_per_cycle", "value": per_cycle,
-                 "unit": "s", "target": 60.0 / 50, "ok": per_cycle <= 60.0 / 50,
+                 "unit": "CPU s", "target": 60.0 / 50, "ok": per_cycle <= 60.0 / 50,
+                 "wall_s": wall / max(res.cycles_run, 1),
                  "steady_state": res.steady_state, "cycles_run": res.cycles_run,
                  "slipping_nodes": len(res.slipping_nodes)})
+    if per_cycle <= FULL_RUN_MAX_CYCLE:
+        wall, cpu, res = steady_time(2000, cycles=50)
+        rows.append({"name": "discrete3d_2000_nodes_to_steady_state", "value": cpu,
+                     "unit": "CPU s", "target": 60.0, "ok": cpu <= 60.0, "wall_s": wall,
+                     "steady_state": res.steady_state, "cycles_run": res.cycles_run})
     return rows
 
 

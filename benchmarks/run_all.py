@@ -36,7 +36,9 @@ def main(argv: list[str]) -> int:
     print("-" * len(header))
     for r in rows:
         ok = r.get("ok")
-        mark = "" if ok is None else ("yes" if ok else "NO")
+        # a row without a target is a measurement, not a check: nothing to pass
+        mark = "-" if r.get("target") is None else ("" if ok is None else
+                                                    ("yes" if ok else "NO"))
         print(f"{r['suite']:<10} {r['name']:<58} {r['value']:>12.4g} {r['unit']:<16} "
               f"{str(r.get('target', '')):<12} {mark}")
     out = HERE.parent / "bench-results"

@@ -10,6 +10,10 @@ conditions (Barber 2012, Fig. 3):
 - ``--protocols FILE`` (any N): a TOML file of ``[[protocol]]`` tables, each with
   ``p_w`` and ``q_w`` lists of load states ((S, N) nested lists) visited before cycling.
 
+A ``model = "discrete3d"`` case (isotropic Coulomb cone, any N) takes ``--random K``
+(admissible initial slips, two components per node; default 16) or ``--protocols FILE``
+(``p_w`` (S, N) and ``q_w`` (S, N, 2) per protocol).
+
 ``--lam`` overrides ``loading.lam``. Runs go through the sweep machinery (``DIR/basins.zarr``,
 ``--resume``, ``--workers``, ``--scheduler``); grid rows run in parallel threads.
 """
@@ -26,7 +30,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("basins", help="basins of attraction over initial conditions",
                        description=__doc__,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("case", type=Path, help="TOML case file (model = \"discrete\")")
+    p.add_argument("case", type=Path, help="TOML case file (model = \"discrete\" or "
+                                              "\"discrete3d\")")
     p.add_argument("--out", type=Path, required=True, help="output directory")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--grid", type=count_option, default=None,
@@ -43,10 +48,20 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from slipcycle.discrete.basins import basins_study
     from slipcycle.io import read_case
 
-    case = read_case(args.case, models=["discrete"])
+    case = read_case(args.case, models=["discrete", "discrete3d"])
+    if case.model == "discrete3d":
+        from slipcycle.discrete3d.basins_study import basins3d_study
+
+        status = basins3d_study(case, args.out, grid=args.grid, random=args.random,
+                                protocols=args.protocols, v1_range=args.v1,
+                                v2_range=args.v2, lam=args.lam, seed=args.seed,
+                                **study_options(args))
+        return finish_study(status, args, case, ("starts", "class_counts", "attractors",
+                                                 "both_outcomes"))
+    from slipcycle.discrete.basins import basins_study
+
     status = basins_study(case, args.out, grid=args.grid, random=args.random,
                           protocols=args.protocols, v1_range=args.v1, v2_range=args.v2,
                           lam=args.lam, seed=args.seed, **study_options(args))

@@ -12,8 +12,16 @@ each iterate the nodes are classified from the augmented variables; stuck nodes 
 Δv_j = 0 and closed nodes w_j = 0 exactly (their Newton rows are the identity), and the
 Newton system is condensed onto the unknowns of the slipping (Δv_j, 2 each) and separated
 (Δv_j, w_j, 3 each) nodes, m ≪ 3N: its matrix is the rows of K for those unknowns with the
-cone's 2×2 linearisation on the slipping rows. Reactions are updated incrementally,
-r ← r + K[:, U] δ, so a step costs O(N m + m³) and nothing of size N².
+cone's 2×2 linearisation on the slipping rows. With the active set held fixed the Newton
+iteration runs on the m unknowns alone, following only the reactions of their rows
+(r_V ← r_V + K[V, U] δ, the block K[V, U] cached per active set); the reactions of all
+nodes are then updated once, r ← r + K[:, U] Δ, and every node is classified again, until
+no node changes state. The LU factors of the Newton matrix are kept per active set and
+reused (chord steps) over the iterations and the following steps while the residual
+falls at least fourfold per step, so that most steps need no factorisation; the two half
+steps of the step control start from the full step's solution (its midpoint, its end),
+a predictor that leaves the solution unchanged. A step costs O(N m) for the reaction
+update and O(m²) per iteration, plus O(m³) when the active set is new.
 
 Step control (step doubling, as for ODE integrators): each load interval is solved as one
 step and as two half steps; if the end states differ by more than ``step_tol`` × the
@@ -41,8 +49,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg.lapack import dgetrf, dgetrs
 
-from slipcycle.discrete3d.cone import node_states, slip_linearisation
+from slipcycle.discrete3d._kernels import (
+    active_residual,
+    add_rows,
+    classify_nodes,
+    gather_block,
+)
+from slipcycle.discrete3d.cone import slip_linearisation
 from slipcycle.discrete3d.model import SEPARATED, SLIP, STICK, FrictionalSystem3D
 from slipcycle.errors import SolverError
 
@@ -80,6 +95,9 @@ class Step:
 class StepSolver:
     """Semismooth Newton solver of the incremental problem of one load step.
 
+    The Newton matrix factorised for an active set is reused (chord steps) while each
+    step reduces the residual at least by the factor ``chord_rate``.
+
     Parameters
     ----------
     system : FrictionalSystem3D
@@ -90,6 +108,9 @@ class StepSolver:
     max_iter : int
         Newton iterations before the step is declared failed (the caller halves it).
     """
+
+    #: largest residual ratio of a chord step before the Newton matrix is refactorised
+    chord_rate = 0.25
 
     def __init__(self, system: FrictionalSystem3D, force_scale: float,
                  rel_tol: float = 1e-11, max_iter: int = 60):
@@ -104,87 +125,182 @@ class StepSolver:
         self.rho_n = np.diag(C).copy()
         self.force_tol = rel_tol * force_scale
         self.max_iter = max_iter
-        self.stats = {"solves": 0, "newton_iterations": 0, "failures": 0}
+        self.stats = {"solves": 0, "newton_iterations": 0, "failures": 0,
+                      "factorisations": 0}
         self._rows_q = np.arange(2 * n).reshape(n, 2)
+        self._blocks: dict = {}
+        self._max_blocks = 8
+        self._lus: dict = {}
 
-    def solve(self, x0: np.ndarray, r0: np.ndarray, drw: np.ndarray) -> Step | None:
+    def solve(self, x0: np.ndarray, r0: np.ndarray, drw: np.ndarray,
+              guess: tuple | None = None) -> Step | None:
         """Solve one load step from state ``x0`` (3N,) with reactions ``r0`` (3N,) under the
         load increment ``drw`` (3N,).
+
+        Parameters
+        ----------
+        x0, r0, drw : (3N,) arrays
+            Start state [m], its reactions [N] and the load increment [N].
+        guess : (x, r) of (3N,) arrays, optional
+            Starting iterate of the Newton method and its reactions
+            ``r = r0 + drw + K (x − x0)`` (a predictor; the solution does not depend on
+            it). If the iteration fails from it, it is repeated from ``x0``.
 
         Returns
         -------
         Step or None
             None if the Newton iteration did not converge within ``max_iter``.
         """
+        if guess is not None:
+            step = self._newton(x0, guess[0].copy(), guess[1].copy(), drw)
+            if step is not None:
+                return step
+        return self._newton(x0, x0.copy(), r0 + drw, drw)
+
+    def _newton(self, x0, x, r, drw) -> Step | None:
+        """The semismooth Newton iteration from the iterate (x, r) (both modified)."""
         self.stats["solves"] += 1
         n, K, f = self.n, self.K, self.f
-        x = x0.copy()
-        r = r0 + drw
-        v0 = x0[:2 * n].reshape(n, 2)
-        for it in range(self.max_iter):
-            dv = x[:2 * n].reshape(n, 2) - v0
-            w = x[2 * n:]
-            q = r[:2 * n].reshape(n, 2)
-            p = r[2 * n:]
-            modes, z, zn = node_states(q, p, dv, w, f, self.rho_t, self.rho_n)
-            stick = modes == STICK
-            contact = modes != SEPARATED
-            fix_t = np.flatnonzero(stick & np.any(dv != 0.0, axis=1))
-            fix_n = np.flatnonzero(contact & (w != 0.0))
-            if fix_t.size or fix_n.size:
+        modes = np.empty(n, np.int8)
+        fix_t = np.empty(n, np.bool_)
+        fix_n = np.empty(n, np.bool_)
+        slip = np.empty(n, np.int64)
+        sep = np.empty(n, np.int64)
+        it = rounds = 0
+        while it < self.max_iter and rounds < self.max_iter:
+            rounds += 1
+            # node states from the augmented variables (cone.node_states, one pass)
+            count, ns, npp = classify_nodes(x, r, x0, f, self.rho_t, self.rho_n, modes,
+                                            fix_t, fix_n, slip, sep)
+            fixed = count > 0
+            if fixed:
                 # the Newton rows of stuck / closed nodes are the identity: exact
-                cols = np.concatenate([self._rows_q[fix_t].ravel(), 2 * n + fix_n])
-                delta = -np.concatenate([dv[fix_t].ravel(), w[fix_n]])
+                jt, jn = np.flatnonzero(fix_t), np.flatnonzero(fix_n)
+                cols = np.concatenate([self._rows_q[jt].ravel(), 2 * n + jn])
+                delta = x0[cols] - x[cols]
+                delta[2 * jt.size:] = -x[2 * n + jn]
                 x[cols] += delta
-                r += delta @ K[cols]          # K symmetric: rows are contiguous
-                dv = x[:2 * n].reshape(n, 2) - v0
-                q = r[:2 * n].reshape(n, 2)
-                p = r[2 * n:]
-            S = np.flatnonzero(modes == SLIP)
-            P = np.flatnonzero(modes == SEPARATED)
-            zs = q[S] - self.rho_t[S, None] * dv[S]
-            zsn = np.linalg.norm(zs, axis=1)
-            zsn = np.where(zsn > 0, zsn, 1e-300)
-            Rs = q[S] - (f[S] * p[S] / zsn)[:, None] * zs
-            Rp = np.concatenate([q[P], p[P, None]], axis=1)
-            R = np.concatenate([Rs.ravel(), Rp.ravel()])
-            if R.size == 0 or np.max(np.abs(R)) <= self.force_tol:
-                if not (fix_t.size or fix_n.size):
+                add_rows(K, cols, delta, r)       # K symmetric: rows are contiguous
+            S, P = slip[:ns].copy(), sep[:npp].copy()
+            if ns + npp == 0:
+                if not fixed:
                     self.stats["newton_iterations"] += it
-                    return Step(x, r, modes, drw, it)
-                if R.size == 0:
-                    continue
-            # condensed Newton system over U = slipping (2 each) + separated (3 each)
-            U = np.concatenate([self._rows_q[S].ravel(),
-                                np.column_stack([self._rows_q[P], 2 * n + P]).ravel()])
-            KUr = K[U]                        # (m, 3N) rows = columns of K (symmetric)
-            m = U.size
-            ns = S.size
-            J = np.empty((m, m))
-            if ns:
-                phi, nvec = slip_linearisation(zs, zsn, p[S], f[S], self.rho_t[S])
-                Kq = KUr[:, self._rows_q[S].ravel()].T.reshape(ns, 2, m)
-                Kp = KUr[:, 2 * n + S].T
-                Js = (Kq - np.einsum("sab,sbm->sam", phi, Kq)
-                      - (f[S][:, None, None] * nvec[:, :, None]) * Kp[:, None, :])
-                # + ρ_t Φ on the node's own slip columns (positions 2i, 2i+1 of U)
-                i = np.arange(ns)
-                Js[i, :, 2 * i] += self.rho_t[S, None] * phi[:, :, 0]
-                Js[i, :, 2 * i + 1] += self.rho_t[S, None] * phi[:, :, 1]
-                J[:2 * ns] = Js.reshape(2 * ns, m)
-            if P.size:
-                rows = np.column_stack([self._rows_q[P], 2 * n + P]).ravel()
-                J[2 * ns:] = KUr[:, rows].T
-            try:
-                delta = np.linalg.solve(J, -R)
-            except np.linalg.LinAlgError:
+                    return Step(x, r, modes.copy(), drw, it)
+                continue
+            key, U, V, KVU = self._active_block(S, P)
+            D, done, it = self._local_newton(key, S, P, KVU, x[U], r[V], x0, it)
+            if done and not fixed and not np.any(D):
+                self.stats["newton_iterations"] += it
+                return Step(x, r, modes.copy(), drw, it)
+            if D is None:
                 break
-            if not np.all(np.isfinite(delta)):
-                break
-            x[U] += delta
-            r += delta @ KUr
+            x[U] += D
+            add_rows(K, U, D, r)
         self.stats["failures"] += 1
         return None
+
+    def _active_block(self, S: np.ndarray, P: np.ndarray):
+        """Unknowns U of the slipping (t1, t2) and separated (t1, t2, n) nodes, the rows
+        V = U ∪ normal rows of the slipping nodes, and the block K[V, U] (cached: the
+        active set repeats over the Newton iterations and consecutive steps)."""
+        key = (S.tobytes(), P.tobytes())
+        hit = self._blocks.get(key)
+        if hit is None:
+            n = self.n
+            U = np.concatenate([self._rows_q[S].ravel(),
+                                np.column_stack([self._rows_q[P], 2 * n + P]).ravel()])
+            V = np.concatenate([U, 2 * n + S])
+            hit = (key, U, V, gather_block(self.K, V, U))
+            if len(self._blocks) >= self._max_blocks:
+                self._blocks.pop(next(iter(self._blocks)))
+            self._blocks[key] = hit
+        return hit
+
+    def _jacobian(self, KVU, ns, npp, zs, zsn, pS, fS, rhoS, idx):
+        """Generalised Jacobian (m × m) of the active rows: the cone's linearisation
+        (:func:`~slipcycle.discrete3d.cone.slip_linearisation`) on the slipping rows, the
+        rows of K on the separated ones."""
+        m = 2 * ns + 3 * npp
+        J = np.empty((m, m))
+        if ns:
+            phi, nvec = slip_linearisation(zs, zsn, pS, fS, rhoS)
+            Kq = KVU[:2 * ns].reshape(ns, 2, m)
+            Js = (Kq - np.matmul(phi, Kq)
+                  - (fS[:, None, None] * nvec[:, :, None]) * KVU[m:][:, None, :])
+            # + ρ_t Φ on the node's own slip columns (positions 2i, 2i+1 of U)
+            Js[idx, :, 2 * idx] += rhoS[:, None] * phi[:, :, 0]
+            Js[idx, :, 2 * idx + 1] += rhoS[:, None] * phi[:, :, 1]
+            J[:2 * ns] = Js.reshape(2 * ns, m)
+        if npp:
+            J[2 * ns:] = KVU[2 * ns:m]
+        return J
+
+    def _local_newton(self, key, S, P, KVU, xU, rV, x0, it):
+        """Newton iterations on the active unknowns U with the active set held fixed.
+
+        Only the reactions of the rows V are followed (r_V += K[V, U] δ): the stuck and
+        closed nodes do not enter the Newton system, and their reactions are updated once
+        by the caller, which then re-classifies every node.
+
+        Returns
+        -------
+        D : (m,) array or None
+            Change of x[U] (None: singular or non-finite Newton step).
+        converged : bool
+            The residual of the active rows is within tolerance at ``xU + D``.
+        it : int
+            Iteration count after these iterations.
+        """
+        f = self.f
+        ns, npp = S.size, P.size
+        m = 2 * ns + 3 * npp
+        fS, rhoS = f[S], self.rho_t[S]
+        rhoP = self.rho_n[P]
+        v0S = x0[self._rows_q[S].ravel()].reshape(ns, 2)
+        xU = xU.copy()
+        rV = rV.copy()
+        D = np.zeros(m)
+        R = np.empty(m)
+        zs = np.empty((ns, 2))
+        zsn = np.empty(ns)
+        idx = np.arange(ns)
+        stepped = False
+        # the Newton matrix last factorised for this active set is reused (chord steps)
+        # while the residual falls at least fourfold per step; the converged solution is
+        # that of the Newton method with a fresh matrix, only the path differs
+        lu = self._lus.get(key)
+        res_prev = np.inf
+        while True:
+            res, changed = active_residual(xU, rV, v0S, fS, rhoS, rhoP, ns, npp, R, zs,
+                                           zsn)
+            if stepped and changed:
+                # a node of the active set changed state: back to the full classification
+                return D, False, it
+            if res <= self.force_tol:
+                return D, True, it
+            if it >= self.max_iter:
+                return D, False, it
+            it += 1
+            if lu is not None and res > self.chord_rate * res_prev:
+                lu = None
+            if lu is None:
+                self.stats["factorisations"] += 1
+                J = self._jacobian(KVU, ns, npp, zs, zsn, rV[m:], fS, rhoS, idx)
+                lu, piv, info = dgetrf(J, overwrite_a=True)
+                if info != 0:           # singular Newton matrix
+                    return None, False, it
+                lu = (lu, piv)
+                if len(self._lus) >= self._max_blocks:
+                    self._lus.pop(next(iter(self._lus)))
+                self._lus[key] = lu
+            delta, info = dgetrs(lu[0], lu[1], -R)
+            if info != 0 or not np.all(np.isfinite(delta)):
+                return None, False, it
+            res_prev = res
+            stepped = True
+            D += delta
+            xU += delta
+            rV += KVU @ delta
 
 
 @dataclass
@@ -328,7 +444,8 @@ class Evolution3D:
         U = np.flatnonzero(dx)
         x = h2.x.copy()
         x[U] += dx[U]
-        r = h2.r + dx[U] @ self.K[U]
+        r = h2.r.copy()
+        add_rows(self.solver.K, U, dx[U], r)
         # return to the admissible set: a step with no load increment from the
         # extrapolated state (an O(h⁴) correction) makes the cone and contact exact again
         proj = self.solver.solve(x, r, np.zeros_like(r))
@@ -336,19 +453,25 @@ class Evolution3D:
             return h2
         return Step(proj.x, proj.r, proj.modes, h2.drw, h2.iterations + proj.iterations)
 
-    def _solve(self, x, r, drw):
-        return self.solver.solve(x, r, drw)
+    def _solve(self, x, r, drw, guess=None):
+        return self.solver.solve(x, r, drw, guess)
 
-    def _interval(self, rwa: np.ndarray, rwb: np.ndarray, full: Step | None, depth: int):
+    def _interval(self, rwa: np.ndarray, rwb: np.ndarray, full: Step | None, depth: int,
+                  guess: tuple | None = None):
         x0, r0 = self.x, self.r
         if full is None:
-            full = self._solve(x0, r0, rwb - rwa)
+            full = self._solve(x0, r0, rwb - rwa, guess)
         if full is not None and (not self.adaptive or self._exact(full)):
             self._commit(full)
             return
         mid = 0.5 * (rwa + rwb)
-        h1 = self._solve(x0, r0, mid - rwa)
-        h2 = None if h1 is None else self._solve(h1.x, h1.r, rwb - mid)
+        # predictors from the full step (r is affine in x and the load, so the guesses'
+        # reactions need no product with K): the middle of the full step for the first
+        # half, the end of the full step (same end load) for the second
+        g1 = None if full is None else (0.5 * (x0 + full.x), 0.5 * (r0 + full.r))
+        h1 = self._solve(x0, r0, mid - rwa, g1)
+        g2 = None if full is None else (full.x, full.r)
+        h2 = None if h1 is None else self._solve(h1.x, h1.r, rwb - mid, g2)
         if full is not None and h2 is not None:
             err = float(np.max(np.abs(full.x - h2.x))) / self.disp_scale
             d_full = float(np.sum(self._step_dissipation(x0, r0, full)))
@@ -378,9 +501,13 @@ class Evolution3D:
         if self._totals is not None:
             self._totals.refinements += 1
         self._interval(rwa, mid, h1, depth + 1)
-        # h2 was computed from h1: still valid if the first half was kept as h1
-        self._interval(mid, rwb, h2 if (h1 is not None and self.x is h1.x) else None,
-                       depth + 1)
+        # h2 was computed from h1: still valid if the first half was kept as h1; else a
+        # predictor for the second half (same end load, so its reactions are consistent)
+        if h1 is not None and self.x is h1.x:
+            self._interval(mid, rwb, h2, depth + 1)
+        else:
+            self._interval(mid, rwb, None, depth + 1,
+                           None if h2 is None else (h2.x, h2.r))
 
     def follow(self, theta: np.ndarray, vals: np.ndarray, record: bool = False
                ) -> PathTotals3D:

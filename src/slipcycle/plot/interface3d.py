@@ -13,7 +13,7 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 
 __all__ = ["state_map", "dissipation_map", "slip_directions", "dissipation_history",
-           "STATE_COLOURS"]
+           "basin_dissipation", "STATE_COLOURS"]
 
 #: colours of stick, slip, separated
 STATE_COLOURS = ("#4c72b0", "#dd8452", "#8c8c8c")
@@ -143,4 +143,38 @@ def dissipation_history(ds):
     ax.set_xlabel("cycle")
     ax.set_ylabel("dissipation per cycle [J]")
     ax.set_title("dissipation history")
+    return fig
+
+
+def basin_dissipation(codes, dissipation, code_names, lam):
+    """Dissipation per cycle [J] of the steady state reached from every start of a basins
+    study, coloured by the class reached (distinct levels are distinct attractors).
+
+    Parameters
+    ----------
+    codes : (S,) int array
+        Class code of each start (index into ``code_names``).
+    dissipation : (S,) array
+        Dissipation per cycle [J] (nan where no cycle was run).
+    code_names : sequence of str
+        Name of each class code.
+    lam : float
+        Load factor of the study (title).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    codes = np.asarray(codes)
+    d = np.asarray(dissipation, float)
+    fig, ax = plt.subplots(figsize=(5.5, 3.5), constrained_layout=True)
+    start = np.arange(codes.size)
+    for c in np.unique(codes):
+        sel = codes == c
+        ax.plot(start[sel], np.where(np.isfinite(d[sel]), d[sel], 0.0), "o",
+                label=code_names[int(c)])
+    ax.set_xlabel("start")
+    ax.set_ylabel("dissipation per cycle [J]")
+    ax.set_title(f"steady states over the starts, λ = {lam:g}")
+    ax.legend(fontsize="small")
     return fig

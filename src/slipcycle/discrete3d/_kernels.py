@@ -1,0 +1,164 @@
+"""Compiled loops of the 3-D step solver (:class:`slipcycle.discrete3d.evolution.StepSolver`).
+
+The node classification and the active residual are the formulas of
+:mod:`slipcycle.discrete3d.cone` (Alart & Curnier 1991) in one pass over the nodes, without
+the temporaries of the array form. The Newton iteration of a load step touches only the
+rows of the dense stiffness K (3N × 3N, symmetric) belonging to the active (slipping and
+separated) nodes; these loops read those rows in place instead of copying them out with
+NumPy fancy indexing, whose temporary copy of an m × 3N block costs more than the
+arithmetic.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["add_rows", "gather_block", "classify_nodes", "active_residual"]
+
+
+@njit(cache=True, nogil=True)
+def add_rows(K, rows, coef, out):  # pragma: no cover - compiled
+    """``out += coef @ K[rows]`` in place (K symmetric: the columns K[:, rows] @ coef).
+
+    Parameters
+    ----------
+    K : (M, M) C-contiguous float array
+    rows : (m,) int array
+    coef : (m,) float array
+    out : (M,) float array, modified
+    """
+    size = out.size
+    for k in range(rows.size):
+        c = coef[k]
+        if c != 0.0:
+            row = K[rows[k]]
+            for i in range(size):
+                out[i] += c * row[i]
+
+
+@njit(cache=True, nogil=True)
+def gather_block(K, rows, cols):  # pragma: no cover - compiled
+    """The block ``K[rows][:, cols]`` ((len(rows), len(cols)) array)."""
+    out = np.empty((rows.size, cols.size))
+    for a in range(rows.size):
+        row = K[rows[a]]
+        for b in range(cols.size):
+            out[a, b] = row[cols[b]]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def classify_nodes(x, r, x0, f, rho_t, rho_n, modes, fix_t, fix_n, slip,
+                   sep):  # pragma: no cover
+    """Node states of the augmented local problem at the iterate ``x`` of a step from
+    ``x0``, as :func:`slipcycle.discrete3d.cone.node_states` (same formulas, one pass).
+
+    Parameters
+    ----------
+    x, r, x0 : (3N,) arrays
+        Iterate [v, w] [m], its reactions [q, p] [N], start of the step [m].
+    f, rho_t, rho_n : (N,) arrays
+    modes : (N,) int8 array, out
+        0 stick, 1 slip, 2 separated.
+    fix_t, fix_n : (N,) bool arrays, out
+        Stuck nodes with a non-zero slip increment, closed nodes with w ≠ 0 (their
+        Newton rows are the identity).
+    slip, sep : (N,) int arrays, out
+        The slipping and the separated nodes, ascending, in their first entries.
+
+    Returns
+    -------
+    count : int
+        Number of nodes flagged in ``fix_t`` or ``fix_n``.
+    ns, npp : int
+        Numbers of slipping and separated nodes.
+    """
+    n = f.size
+    count = 0
+    ns = 0
+    npp = 0
+    for j in range(n):
+        dv1 = x[2 * j] - x0[2 * j]
+        dv2 = x[2 * j + 1] - x0[2 * j + 1]
+        w = x[2 * n + j]
+        phat = r[2 * n + j] - rho_n[j] * w
+        z1 = r[2 * j] - rho_t[j] * dv1
+        z2 = r[2 * j + 1] - rho_t[j] * dv2
+        zn = np.sqrt(z1 * z1 + z2 * z2)
+        if phat <= 0.0:
+            modes[j] = 2
+            sep[npp] = j
+            npp += 1
+        elif zn > f[j] * phat:
+            modes[j] = 1
+            slip[ns] = j
+            ns += 1
+        else:
+            modes[j] = 0
+        fix_t[j] = modes[j] == 0 and (dv1 != 0.0 or dv2 != 0.0)
+        fix_n[j] = modes[j] != 2 and w != 0.0
+        if fix_t[j] or fix_n[j]:
+            count += 1
+    return count, ns, npp
+
+
+@njit(cache=True, nogil=True)
+def active_residual(xU, rV, v0S, fS, rhoS, rhoP, ns, npp, R, zs, zsn):  # pragma: no cover
+    """Residual of the active rows (Alart–Curnier form, :mod:`slipcycle.discrete3d.cone`)
+    with the active set held fixed.
+
+    Parameters
+    ----------
+    xU : (m,) array
+        Unknowns of the ``ns`` slipping (t1, t2) then ``npp`` separated (t1, t2, n) nodes.
+    rV : (m + ns,) array
+        Their reactions, then the normal reactions of the slipping nodes [N].
+    v0S : (ns, 2) array
+        Slips of the slipping nodes at the start of the step [m].
+    fS, rhoS : (ns,) arrays
+    rhoP : (npp,) array
+    R : (m,) array, out
+        q − f p z/|z| on the slipping rows, (q, p) on the separated ones [N].
+    zs : (ns, 2) array, out
+        Augmented variables z = q − ρ_t Δv.
+    zsn : (ns,) array, out
+        |z| (a zero replaced by 1e-300).
+
+    Returns
+    -------
+    res : float
+        max |R| [N].
+    changed : bool
+        Some node left its state (a slipping node stuck or opened, a separated one
+        closed).
+    """
+    m = 2 * ns + 3 * npp
+    res = 0.0
+    changed = False
+    for i in range(ns):
+        q1 = rV[2 * i]
+        q2 = rV[2 * i + 1]
+        p = rV[m + i]
+        z1 = q1 - rhoS[i] * (xU[2 * i] - v0S[i, 0])
+        z2 = q2 - rhoS[i] * (xU[2 * i + 1] - v0S[i, 1])
+        zn = np.sqrt(z1 * z1 + z2 * z2)
+        if p <= 0.0 or zn <= fS[i] * p:
+            changed = True
+        if zn <= 0.0:
+            zn = 1e-300
+        zs[i, 0] = z1
+        zs[i, 1] = z2
+        zsn[i] = zn
+        c = fS[i] * p / zn
+        R[2 * i] = q1 - c * z1
+        R[2 * i + 1] = q2 - c * z2
+        res = max(res, abs(R[2 * i]), abs(R[2 * i + 1]))
+    for k in range(2 * ns, m):
+        R[k] = rV[k]
+        res = max(res, abs(R[k]))
+    for i in range(npp):
+        k = 2 * ns + 3 * i + 2
+        if rV[k] - rhoP[i] * xU[k] > 0.0:
+            changed = True
+    return res, changed
