@@ -111,3 +111,26 @@ def test_event_scan_finds_the_first_event(seed, n, ties):
     dt, kind, j, _ = _scan_events(f, q, p, w, qd, pd, wd, modes, 1e-12, 1e-12, 0.7)
     assert (kind, j) == (ref[1], ref[2])
     assert dt == ref[0]
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(2, 40), steps=st.integers(20, 300))
+def test_single_node_events_update_in_place_without_refactorizing(seed, n, steps):
+    """The usual event changes one node (stick ↔ slip): the inverse is bordered or reduced
+    in place, O(k²), through every size from 0 to N (its buffer grows by doubling), with no
+    factorization after the first; rates equal the dense solve to 1e-9 relative."""
+    system = _system(seed, n)
+    solver = RateSolver(system, 1e-12)
+    rng = np.random.default_rng(seed + 11)
+    modes = np.zeros(n, np.int8)
+    solver.rates(modes, rng.normal(size=2 * n))
+    for _ in range(min(steps, 390)):        # below the refresh after 400 updates
+        j = rng.integers(n)
+        modes = modes.copy()
+        modes[j] = STICK if modes[j] != STICK else rng.choice([SLIP_POS, SLIP_NEG])
+        rw = rng.normal(size=2 * n)
+        got = solver.rates(modes, rw)
+        xd, rd = _dense_rates(system, modes, rw)
+        np.testing.assert_allclose(got[0], xd, rtol=0, atol=1e-9 * (np.abs(xd).max() + 1e-300))
+        np.testing.assert_allclose(got[1], rd, rtol=0, atol=1e-9 * np.abs(rd).max() + 1e-12)
+    assert solver.stats["factorizations"] == 1

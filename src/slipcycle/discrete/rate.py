@@ -77,6 +77,63 @@ def _mode_rates(Minv, Kr, b, rw):
     return sol, rd
 
 
+@njit(cache=True)
+def _border_one(P, k, bcol, crow, d):
+    """Grow the inverse P[:k, :k] of a mode matrix by one unknown, in place in its buffer:
+    new column ``bcol`` (k,), row ``crow`` (k,), diagonal ``d``. With Pb = P bcol,
+    cP = crow P and the Schur complement s = d − crow·Pb, the inverse of the bordered
+    matrix is [[P + Pb cP / s, −Pb / s], [−cP / s, 1 / s]]. Two matrix–vector products
+    and one rank-one update: three passes over k² entries, no allocation of a k × k
+    temporary. Returns s (0 or non-finite: the bordered matrix is singular, P is then
+    left unchanged)."""
+    pb = np.zeros(k)
+    cp = np.zeros(k)
+    for a in range(k):
+        s = 0.0
+        ca = crow[a]
+        for b in range(k):
+            s += P[a, b] * bcol[b]
+            cp[b] += ca * P[a, b]
+        pb[a] = s
+    sch = d
+    for a in range(k):
+        sch -= crow[a] * pb[a]
+    if sch == 0.0 or not np.isfinite(sch):
+        return sch
+    inv = 1.0 / sch
+    for a in range(k):
+        fa = pb[a] * inv
+        for b in range(k):
+            P[a, b] += fa * cp[b]
+        P[a, k] = -fa
+        P[k, a] = -cp[a] * inv
+    P[k, k] = inv
+    return sch
+
+
+@njit(cache=True)
+def _remove_one(P, k, i):
+    """Drop unknown ``i`` from the inverse P[:k, :k] of a mode matrix, in place: the
+    inverse of the matrix without row and column i is P − P[:, i] P[i, :] / P[i, i]
+    restricted to the others (Schur-complement removal); the last unknown then moves
+    into the hole (swap-delete, the order :meth:`RateSolver._remove` keeps). One pass
+    over k² entries."""
+    col = P[:k, i].copy()
+    row = P[i, :k].copy()
+    inv = 1.0 / P[i, i]
+    for a in range(k):
+        fa = col[a] * inv
+        if fa != 0.0:
+            for b in range(k):
+                P[a, b] -= fa * row[b]
+    last = k - 1
+    if i != last:
+        for b in range(k):
+            P[i, b] = P[last, b]
+        for a in range(k):
+            P[a, i] = P[a, last]
+
+
 class RateProblemError(SolverError):
     """The rate problem has no (unique) solution: the model is ill posed at this state."""
 
@@ -99,7 +156,9 @@ class RateSolver:
         self.force_tol = float(force_tol)
         self.disp_tol = self.force_tol / float(np.max(np.diag(system.C)))
         self._unk: np.ndarray | None = None   # keys of the current mode system's unknowns
-        self._Minv = np.zeros((0, 0))     # its inverse, kept current by O(k²) updates
+        # its inverse, kept current by O(k²) updates in place: the leading k × k block of
+        # a buffer with room to grow (doubling), so that an event allocates no k × k array
+        self._P = np.zeros((0, 0))
         self._updates = 0
         self._modes_key = None
         self._arrays = None
@@ -121,6 +180,28 @@ class RateSolver:
         gm = (f * p - q <= tol) & ~sep
         p0 = (p <= tol) & ~sep
         return gp, gm, p0, sep
+
+    @property
+    def _Minv(self) -> np.ndarray:
+        """The inverse of the current mode matrix (k, k): a view into its buffer."""
+        k = 0 if self._unk is None else self._unk.size
+        return self._P[:k, :k]
+
+    def _room(self, k: int) -> None:
+        """Make the inverse's buffer hold at least k × k (doubling, keeping the content)."""
+        if self._P.shape[0] < k:
+            cap = min(max(2 * k, 16), 2 * self.n)
+            buf = np.empty((cap, cap))
+            kk = 0 if self._unk is None else min(self._unk.size, self._P.shape[0])
+            buf[:kk, :kk] = self._P[:kk, :kk]
+            self._P = buf
+
+    def _store(self, Minv: np.ndarray) -> None:
+        k = Minv.shape[0]
+        if self._P.shape[0] < k:
+            cap = min(max(2 * k, 16), 2 * self.n)
+            self._P = np.empty((cap, cap))
+        self._P[:k, :k] = Minv
 
     # -- rates for a given mode set --------------------------------------------------------
     # Each unknown has an integer key 4*col + kind: col is its index in x = [v, w], kind 1 a
@@ -158,7 +239,6 @@ class RateSolver:
         self._Kr = self._grow(keys.size)
         self._Kr[:keys.size] = self.K[keys // 4]
         if keys.size == 0:
-            self._Minv = np.zeros((0, 0))
             return True
         M = self._entries(keys, keys)
         try:
@@ -170,7 +250,7 @@ class RateSolver:
         if not np.isfinite(cond) or cond > 1e13:
             self._unk = None
             return False
-        self._Minv = Minv
+        self._store(Minv)
         return True
 
     def _grow(self, k: int) -> np.ndarray:
@@ -187,10 +267,19 @@ class RateSolver:
 
         The last unknowns move into the holes (swap-delete), so that only the rows of K
         that change place are copied: O(r N + k² r) for r removed of k unknowns."""
+        buf = self._Kr
+        if idx.size == 1:
+            # one unknown leaves (the usual event): in place, one pass over k² entries
+            i, k = int(idx[0]), self._unk.size
+            _remove_one(self._P, k, i)
+            if i != k - 1:
+                buf[i] = buf[k - 1]
+                self._unk[i] = self._unk[k - 1]
+            self._unk = self._unk[:k - 1].copy()
+            return
         P = self._Minv
         order = np.arange(P.shape[0])
         size = order.size
-        buf = self._Kr
         for i in np.sort(idx)[::-1]:
             size -= 1
             if i != size:
@@ -200,13 +289,28 @@ class RateSolver:
         Pkr = P[np.ix_(keep, idx)]
         Prk = P[np.ix_(idx, keep)]
         Prr = P[np.ix_(idx, idx)]
-        self._Minv = P[np.ix_(keep, keep)] - Pkr @ np.linalg.solve(Prr, Prk)
+        self._store(P[np.ix_(keep, keep)] - Pkr @ np.linalg.solve(Prr, Prk))
         self._unk = self._unk[keep]
 
     def _add(self, new: np.ndarray) -> bool:
         """Add unknowns ``new`` by block bordering of the inverse."""
-        P = self._Minv
         old = self._unk
+        if new.size == 1:
+            # one node changes state (the usual event): bordering in place, O(k²)
+            k = old.size
+            self._room(k + 1)
+            bcol = self._entries(old, new)[:, 0]
+            crow = self._entries(new, old)[0]
+            d = float(self._entries(new, new)[0, 0])
+            sch = _border_one(self._P, k, np.ascontiguousarray(bcol),
+                              np.ascontiguousarray(crow), d)
+            if not (np.isfinite(sch) and sch != 0.0):
+                return False
+            buf = self._grow(k + 1)
+            buf[k] = self.K[new[0] // 4]
+            self._unk = np.concatenate([old, new])
+            return True
+        P = self._Minv
         Bm = self._entries(old, new)          # (k, r) new columns, old rows
         Cm = self._entries(new, old)          # (r, k) new rows, old columns
         Dm = self._entries(new, new)          # (r, r)
@@ -235,7 +339,7 @@ class RateSolver:
         Q[k:, k:] = Sinv
         buf = self._grow(k + r)
         buf[k:k + r] = self.K[new // 4]
-        self._Minv = Q
+        self._store(Q)
         self._unk = np.concatenate([old, new])
         return True
 
