@@ -5,7 +5,9 @@ not import dask for a run that uses none. (Start-up times are benchmarks, in
 
 from __future__ import annotations
 
+import gc
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -14,7 +16,8 @@ import pytest
 
 from slipcycle.examples import example_text
 
-HEAVY = ("numpy", "scipy", "numba", "xarray", "pandas", "matplotlib", "netCDF4", "dask")
+HEAVY = ("numpy", "scipy", "numba", "xarray", "pandas", "matplotlib", "netCDF4", "dask",
+         "PIL", "llvmlite")
 
 _PROBE = textwrap.dedent("""
     import json, sys
@@ -78,6 +81,54 @@ def test_run_imports_only_the_model_of_its_case_and_no_dask(tmp_path):
     assert not any(m.split(".")[0] in ("tkinter", "PyQt5", "PyQt6", "PySide6", "gi")
                    for m in mods)
     assert (tmp_path / "out" / "figures").is_dir()
+
+
+def _figure_workers_used() -> bool:
+    """Whether ``slipcycle run`` draws its figures in worker processes here."""
+    return sys.platform.startswith("linux") and len(os.sched_getaffinity(0)) > 1 \
+        and not os.environ.get("SLIPCYCLE_DEBUG")
+
+
+def test_run_of_a_sphere_defers_scipy_and_draws_figures_outside_the_solving_process(tmp_path):
+    """SciPy's interpolation and special functions serve other profiles and the measured
+    topography only; with figure workers (Linux, more than one CPU) the process that
+    solves imports no matplotlib and no image library at all."""
+    case = tmp_path / "sphere.toml"
+    case.write_text(example_text("halfspace_sphere").replace("steps_per_cycle = 400",
+                                                             "steps_per_cycle = 40"))
+    res = _probe(["run", str(case), "--out", str(tmp_path / "out"), "-q"])
+    assert res["code"] == 0, res["stderr"]
+    mods = set(res["modules"])
+    for deferred in ("scipy.interpolate", "scipy.special", "scipy.optimize",
+                     "matplotlib.pyplot"):
+        assert deferred not in mods, f"run of a sphere imported {deferred}"
+    if _figure_workers_used():
+        assert not {"matplotlib", "PIL"} & {m.split(".")[0] for m in mods}
+    names = sorted(p.name for p in (tmp_path / "out" / "figures").iterdir())
+    assert names == ["dissipation_density.png", "hysteresis.png", "load_path.png",
+                     "stick_zone.png", "tractions.png"]
+    assert not list(tmp_path.glob(".out.partial-*"))
+
+
+def test_help_of_every_command_imports_no_numerical_stack():
+    from slipcycle.cli.main import COMMANDS
+
+    for command in COMMANDS:
+        res = _probe([command, "--help"])
+        loaded = [m for m in HEAVY if m in res["modules"]]
+        assert res["code"] == 0 and loaded == [], f"{command} --help imported {loaded}"
+
+
+def test_main_called_with_arguments_leaves_the_garbage_collector_as_it_was(tmp_path):
+    """In-process callers (tests, notebooks) keep their collector settings; only the
+    ``slipcycle`` process itself runs with larger thresholds and freezes at its end."""
+    from slipcycle.cli.main import main
+
+    before = gc.get_threshold()
+    frozen = gc.get_freeze_count()
+    assert main(["examples"]) == 0
+    assert gc.get_threshold() == before
+    assert gc.get_freeze_count() == frozen
 
 
 def test_dask_guard_keeps_real_dask_arrays_working():

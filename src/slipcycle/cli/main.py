@@ -17,6 +17,7 @@ when it is a terminal.
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import sys
 
@@ -47,6 +48,12 @@ _REQUIRES = {"sweep": ("zarr",), "shakedown": ("zarr",), "basins": ("zarr",)}
 
 #: the argument of each command that names a file (not a directory) it writes
 _FILE_OUTPUTS = {"reduce": ("out", "case")}
+
+#: thresholds of the cyclic garbage collector while a command runs. A command imports
+#: NumPy, xarray, Numba and matplotlib (about 10^6 objects): at Python's default (700, 10,
+#: 10) the collector runs some 400 times, 0.2 s of a 1.5 s ``slipcycle run``; young
+#: garbage is still collected every 20 000 allocations.
+_GC_THRESHOLDS = (20_000, 20, 20)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -139,7 +146,25 @@ def main(argv: list[str] | None = None) -> int:
     0 success; 2 invalid input, unusable files or a missing optional dependency; 3 a solver
     that cannot proceed on a valid model; 4 an internal error (a bug: please report it, with
     ``SLIPCYCLE_DEBUG=1`` for the traceback); 130 interrupted.
+
+    Without ``argv`` (the ``slipcycle`` script, ``python -m slipcycle.cli.main``) the
+    process ends after the command: the objects left are then frozen
+    (:func:`gc.freeze`), so that the interpreter's final garbage collection does not walk
+    them all (0.3 s with NumPy, xarray, Numba and matplotlib loaded). Called with
+    ``argv``, the collector is left as it was.
     """
+    thresholds = gc.get_threshold()
+    gc.set_threshold(*_GC_THRESHOLDS)
+    try:
+        return _main(argv)
+    finally:
+        if argv is None:
+            gc.freeze()
+        else:
+            gc.set_threshold(*thresholds)
+
+
+def _main(argv: list[str] | None) -> int:
     import os
 
     parser = build_parser()

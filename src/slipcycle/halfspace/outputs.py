@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import ClassVar
 
 import numpy as np
@@ -274,18 +275,22 @@ class HalfspaceResult(RunResult):
 
     def figures(self, dataset: xr.Dataset | None = None) -> dict:
         """Figure name -> function drawing it (``hysteresis``, ``load_path``, and where
-        the data exist ``tractions``, ``dissipation_density``, ``stick_zone``)."""
+        the data exist ``tractions``, ``dissipation_density``, ``stick_zone``).
+
+        Each function is a :func:`functools.partial` of a :mod:`slipcycle.plot.halfspace`
+        function and the Dataset: it can be pickled, so the command line draws the figures
+        in worker processes, and matplotlib is imported only when one is drawn.
+        """
         from slipcycle.plot import halfspace as hplot
 
         ds = self.to_dataset() if dataset is None else dataset
-        model = self.model_input
-        figures = {"hysteresis": lambda: hplot.hysteresis(ds),
-                   "load_path": lambda: hplot.load_path(ds, model.friction)}
+        figures = {"hysteresis": partial(hplot.hysteresis, ds),
+                   "load_path": partial(hplot.load_path, ds, float(self.model_input.friction))}
         if "shear_traction" in ds:
-            figures["tractions"] = lambda: hplot.tractions(ds)
-            figures["dissipation_density"] = lambda: hplot.dissipation_density(ds)
+            figures["tractions"] = partial(hplot.tractions, ds)
+            figures["dissipation_density"] = partial(hplot.dissipation_density, ds)
         if "stick_size" in ds and self.history.cycles_run:
-            figures["stick_zone"] = lambda: hplot.stick_zone(ds)
+            figures["stick_zone"] = partial(hplot.stick_zone, ds)
         return figures
 
 

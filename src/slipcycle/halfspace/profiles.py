@@ -19,7 +19,6 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from scipy.special import gamma
 
 __all__ = ["Profile", "PowerLaw", "sphere", "Cylinder2D", "FlatPunch", "RoughExponential",
            "Tabulated"]
@@ -81,6 +80,10 @@ class PowerLaw:
 
     @property
     def kappa(self) -> float:
+        if self.n == 2.0:  # the sphere (Hertz): sqrt(pi) G(2)/G(3/2) = 2, without SciPy
+            return 2.0
+        from scipy.special import gamma  # on use: SciPy adds 0.2 s to a start-up
+
         return math.sqrt(math.pi) * gamma(self.n / 2 + 1) / gamma(self.n / 2 + 0.5)
 
     def _a_from_P(self, P):

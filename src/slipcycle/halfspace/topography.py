@@ -37,7 +37,6 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from scipy.interpolate import PchipInterpolator
 
 from slipcycle.errors import InputError, SolverError
 from slipcycle.halfspace.profiles import RoughExponential, Tabulated
@@ -305,6 +304,8 @@ class BEMLaw:
         From the slope of U against ln p̄ (PCHIP through the BEM points):
         dp̄/dU = p̄ / (dU/d ln p̄).
         """
+        from scipy.interpolate import PchipInterpolator  # SciPy on use: start-up
+
         lnp = np.log(self.pressure)
         dU = PchipInterpolator(lnp, self.approach).derivative()(np.log(p))
         return np.asarray(p) / dU
@@ -556,6 +557,8 @@ def smooth_table(law: BEMLaw, nominal_area: float, n_points: int) -> Tabulated:
     Tabulated
         P in N, U in m.
     """
+    from scipy.interpolate import PchipInterpolator  # SciPy on use: start-up
+
     interp = PchipInterpolator(np.log(law.pressure), law.approach)
     p = np.linspace(law.pressure[0], law.pressure[-1], max(int(n_points), 2))
     U = np.concatenate([[0.0], interp(np.log(p))])

@@ -5,8 +5,11 @@ when every file has been written, so a run that fails leaves nothing that looks 
 result. Every output carries the case text, units and the provenance of
 :func:`slipcycle.io.metadata.provenance` (versions, platform, command line); ``result.nc``
 is completed to the CF-1.10 conventions in one place, :func:`write_netcdf`. Figures are
-drawn with the non-interactive Agg backend. xarray is imported only when a Dataset is
-written, and kept from importing dask where none is used (:func:`dask_not_imported`).
+drawn with the non-interactive Agg backend and written by :func:`save_figure`, here one
+after another (:func:`draw_figures`) or by a caller's drawer running beside the netCDF
+write (the command line's worker processes, :mod:`slipcycle.cli.figure_worker`). xarray is
+imported only when a Dataset is written, and kept from importing dask where none is used
+(:func:`dask_not_imported`).
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -35,9 +38,13 @@ log = logging.getLogger("slipcycle")
 
 __all__ = ["RunOutputs", "write_outputs", "provenance", "to_jsonable", "check_output_dir",
            "check_output_file", "remove_stale_partials", "write_together", "write_netcdf",
-           "defer_dask_detection", "dask_not_imported"]
+           "defer_dask_detection", "dask_not_imported", "FIGURE_DPI", "save_figure",
+           "draw_figures", "FigureDrawing"]
 
 RESULT_FILES = ("summary.json", "result.nc", "figures")
+
+#: resolution of every figure file [dots per inch]
+FIGURE_DPI = 120
 
 
 class _DeferredDask:
@@ -184,13 +191,53 @@ def to_jsonable(obj: Any) -> Any:
     return obj
 
 
+class FigureDrawing(Protocol):
+    """Figures being drawn into a directory (what a ``draw`` of :func:`write_outputs`
+    returns)."""
+
+    def result(self) -> None:
+        """Wait until every figure file is written; raise what drawing raised."""
+
+    def cancel(self) -> None:
+        """Stop drawing; once this returns, nothing more is written."""
+
+
+class _Drawn:
+    """Figures already written (the drawing of :func:`draw_figures`)."""
+
+    def result(self) -> None:
+        pass
+
+    def cancel(self) -> None:
+        pass
+
+
 def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | None = None,
-                  case_path: Path | None = None) -> Path:
+                  case_path: Path | None = None, *,
+                  draw: Callable[[Mapping[str, Callable[[], Any]], Path], FigureDrawing]
+                  | None = None) -> Path:
     """Write ``outputs`` to ``out_dir`` atomically.
 
     Files are written into a staging directory next to ``out_dir`` and then renamed into
     place. If anything fails, the staging directory is removed and ``out_dir`` keeps
     whatever it held before (previous result files are only replaced on success).
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The result directory (created if missing).
+    outputs : RunOutputs
+    case_text : str, optional
+        The case file's text, kept in the provenance.
+    case_path : Path, optional
+        Where the case was read from.
+    draw : callable, optional
+        ``draw(figures, directory)`` starts writing each figure of ``figures`` (name ->
+        function returning a Figure) to ``directory/<name>.png`` with
+        :func:`save_figure` and returns its :class:`FigureDrawing`; the files are
+        committed only after its ``result()`` returned. It is started before the summary
+        and ``result.nc`` are written, so that it may run beside them. Default
+        :func:`draw_figures` (here, one after another).
 
     Returns
     -------
@@ -206,8 +253,12 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
                                       dir=out_dir.parent))
     except OSError as exc:
         raise _output_error(out_dir, exc) from None
-    meta = provenance(case_text, case_path)
+    drawing: FigureDrawing | None = None
     try:
+        meta = provenance(case_text, case_path)   # inside: an interrupt here removes stage
+        if outputs.figures:
+            (stage / "figures").mkdir()
+            drawing = (draw or draw_figures)(outputs.figures, stage / "figures")
         summary = dict(outputs.summary)
         summary.setdefault("units", {})
         summary["metadata"] = {k: v for k, v in meta.items() if k != "case"}
@@ -217,23 +268,49 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
         if outputs.dataset is not None:
             write_netcdf(stage / "result.nc", outputs.dataset, meta,
                          summary.get("units"), outputs.flags)
-        if outputs.figures:
-            (stage / "figures").mkdir()
-            with _figure_backend() as plt:
-                for name, make in outputs.figures.items():
-                    fig = make()
-                    fig.savefig(stage / "figures" / f"{name}.png", dpi=120)
-                    plt.close(fig)
         for rel, writer in outputs.extra_files.items():
             target = stage / rel
             target.parent.mkdir(parents=True, exist_ok=True)
             writer(target)
+        if drawing is not None:
+            drawing.result()
+            drawing = None
         _commit(stage, out_dir)
     except OSError as exc:
         raise _output_error(out_dir, exc) from None
     finally:
+        if drawing is not None:  # failed or interrupted: no figure may land after cleanup
+            drawing.cancel()
         shutil.rmtree(stage, ignore_errors=True)
     return out_dir
+
+
+def save_figure(fig, path: Path) -> None:
+    """Write the matplotlib Figure ``fig`` to ``path`` as PNG at :data:`FIGURE_DPI`
+    (and close it if pyplot manages it).
+
+    zlib level 1 rather than PIL's default 6: PNG is lossless at every level, so the image
+    is the same; it is written faster and the file is about 9 % larger.
+    """
+    fig.savefig(path, dpi=FIGURE_DPI, pil_kwargs={"compress_level": 1})
+    plt = sys.modules.get("matplotlib.pyplot")
+    if plt is not None:
+        plt.close(fig)
+
+
+def draw_figures(figures: Mapping[str, Callable[[], Any]], directory: Path) -> FigureDrawing:
+    """Draw each figure of ``figures`` (name -> function returning a Figure) and write it
+    to ``directory/<name>.png`` (:func:`save_figure`), one after another, in this process.
+
+    Returns
+    -------
+    FigureDrawing
+        Done already.
+    """
+    with _figure_backend():
+        for name, make in figures.items():
+            save_figure(make(), Path(directory) / f"{name}.png")
+    return _Drawn()
 
 
 def write_netcdf(path: Path, dataset: xr.Dataset, meta: Mapping | None = None,
@@ -252,21 +329,46 @@ def write_netcdf(path: Path, dataset: xr.Dataset, meta: Mapping | None = None,
     ds.attrs.update(netcdf_attributes(meta or provenance(None)))
     for problem in cf_problems(ds):
         log.info("result.nc: CF: %s", problem)
-    with dask_not_imported():
+    with dask_not_imported(), _interrupt_deferred():
         ds.to_netcdf(path)
 
 
 @contextlib.contextmanager
+def _interrupt_deferred():
+    """Hold an interrupt (SIGINT, Ctrl-C) back until the block ends.
+
+    An interrupt inside xarray's netCDF writer, between the acquisition of its HDF5 lock
+    and its cleanup, leaves the lock held and the cleanup waiting on it for ever; held
+    back, it is raised once the file is complete (and the staged write removes it). Only
+    in the main thread of a POSIX process; elsewhere the block runs as it is.
+    """
+    import signal
+    import threading
+
+    if not hasattr(signal, "pthread_sigmask") \
+            or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+@contextlib.contextmanager
 def _figure_backend():
-    """matplotlib.pyplot on the non-interactive Agg backend (no display is needed, and
-    no GUI toolkit is loaded)."""
+    """matplotlib on the non-interactive Agg backend (no display is needed, and no GUI
+    toolkit is loaded). pyplot is not imported for it: figures made as
+    ``matplotlib.figure.Figure`` do not need it (0.1 s saved), and a plot function that
+    uses pyplot starts it on Agg."""
     import matplotlib
 
-    if matplotlib.get_backend().lower() != "agg":
+    if "matplotlib.pyplot" not in sys.modules:
+        matplotlib.use("Agg")  # records the backend; nothing is loaded
+    elif matplotlib.get_backend().lower() != "agg":
         matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    yield plt
+    yield
 
 
 def write_together(outputs: list[tuple[Path, Callable[[Path], None]]]) -> None:

@@ -1,13 +1,29 @@
-"""Figures of half-space runs; each function takes the result Dataset, returns a Figure."""
+"""Figures of half-space runs; each function takes the result Dataset, returns a Figure.
+
+matplotlib is imported when a figure is drawn, not with this module: a run prepares its
+figures (:meth:`slipcycle.halfspace.outputs.HalfspaceResult.figures`) without drawing them,
+and the command line draws them in a process that has matplotlib loaded already.
+"""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import xarray as xr
-from matplotlib.figure import Figure
+
+if TYPE_CHECKING:  # pragma: no cover
+    import xarray as xr
+    from matplotlib.figure import Figure
 
 __all__ = ["hysteresis", "load_path", "tractions", "dissipation_density", "stick_zone",
            "w_hat_vs_phase", "w_hat_cubic_law"]
+
+
+def _figure(width: float, height: float) -> Figure:
+    """A Figure of ``width`` x ``height`` inches, not managed by pyplot."""
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height))
 
 
 def _last_cycle(ds: xr.Dataset) -> xr.Dataset:
@@ -36,7 +52,7 @@ def _mark_gross_slip(ax, ds: xr.Dataset, x: str) -> None:
 
 def hysteresis(ds: xr.Dataset) -> Figure:
     """Tangential load Q against displacement V: assembly, last completed cycle, gross slip."""
-    fig = Figure(figsize=(5.5, 4.2))
+    fig = _figure(5.5, 4.2)
     ax = fig.add_subplot()
     asm = ds.isel(step=np.flatnonzero(ds.cycle.values < 0))
     last, part = _last_cycle(ds), _partial_cycle(ds)
@@ -62,7 +78,7 @@ def hysteresis(ds: xr.Dataset) -> Figure:
 
 def load_path(ds: xr.Dataset, friction: float) -> Figure:
     """Load path in the P–Q plane with the friction cone |Q| = fP."""
-    fig = Figure(figsize=(5.5, 4.2))
+    fig = _figure(5.5, 4.2)
     ax = fig.add_subplot()
     Pmax = max(float(ds.P.max()) if ds.sizes["step"] else 0.0,
                float(ds.gross_slip_P) if "gross_slip_P" in ds else 0.0) * 1.1 or 1.0
@@ -92,7 +108,7 @@ def load_path(ds: xr.Dataset, friction: float) -> Figure:
 
 def tractions(ds: xr.Dataset) -> Figure:
     """Pressure and shear traction over the radius at the snapshot instants."""
-    fig = Figure(figsize=(6.5, 4.4))
+    fig = _figure(6.5, 4.4)
     ax = fig.add_subplot()
     r = ds.radius.values * 1e3
     for i, th in enumerate(ds.snapshot_theta.values):
@@ -112,7 +128,7 @@ def tractions(ds: xr.Dataset) -> Figure:
 
 def dissipation_density(ds: xr.Dataset) -> Figure:
     """Local dissipation per unit area W(r) over the last cycle."""
-    fig = Figure(figsize=(5.5, 4.0))
+    fig = _figure(5.5, 4.0)
     ax = fig.add_subplot()
     ax.plot(ds.radius * 1e3, ds.dissipation_density, color="C3")
     if "permanent_stick_size" in ds:
@@ -129,7 +145,7 @@ def dissipation_density(ds: xr.Dataset) -> Figure:
 
 def stick_zone(ds: xr.Dataset) -> Figure:
     """Stick-zone size against the cycle angle in the last cycle."""
-    fig = Figure(figsize=(5.5, 3.6))
+    fig = _figure(5.5, 3.6)
     ax = fig.add_subplot()
     last = _last_cycle(ds)
     ax.plot(last.theta, last.stick_size * 1e3, label="stick zone")
@@ -143,7 +159,7 @@ def stick_zone(ds: xr.Dataset) -> Figure:
 
 def w_hat_vs_phase(ds: xr.Dataset, P1_hat: float) -> Figure:
     """Ŵ against the phase φ for several Q̂1 at fixed P̂1 (Barber 2012, Fig. 7)."""
-    fig = Figure(figsize=(6.0, 4.2))
+    fig = _figure(6.0, 4.2)
     ax = fig.add_subplot()
     sub = ds.W_hat.sel(P1_hat=P1_hat, method="nearest")
     for q in sub.Q1_hat.values:
@@ -160,7 +176,7 @@ def w_hat_vs_phase(ds: xr.Dataset, P1_hat: float) -> Figure:
 
 def w_hat_cubic_law(Q1_hat: np.ndarray, W_hat: np.ndarray, label: str) -> Figure:
     """log–log Ŵ against Q̂1 with the small-amplitude law (2/3) Q̂1³."""
-    fig = Figure(figsize=(5.5, 4.2))
+    fig = _figure(5.5, 4.2)
     ax = fig.add_subplot()
     ax.loglog(Q1_hat, W_hat, "o-", label=label)
     ax.loglog(Q1_hat, 2 / 3 * Q1_hat**3, "k--", label="(2/3) Q̂1³")
