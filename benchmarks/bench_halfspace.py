@@ -122,12 +122,13 @@ def _exponent(sizes, times) -> float:
     return float(np.polyfit(np.log(sizes), np.log(times), 1)[0])
 
 
-def _w_hat_map_time(n1: int, n2: int, n3: int) -> tuple[float, float]:
-    """(wall time [s], gross-slip fraction) of the Ŵ map on an n1 × n2 × n3 grid."""
-    t0 = time.perf_counter()
+def _w_hat_map_time(n1: int, n2: int, n3: int) -> tuple[float, float, float]:
+    """(wall time [s], CPU time of the process [s], gross-slip fraction) of the Ŵ map on
+    an n1 × n2 × n3 grid."""
+    t0, c0 = time.perf_counter(), time.process_time()
     W = w_hat_map(np.linspace(0, 0.9, n1), np.linspace(0.01, 0.99, n2),
                   np.linspace(-np.pi, np.pi, n3))
-    return time.perf_counter() - t0, float(np.isnan(W).mean())
+    return time.perf_counter() - t0, time.process_time() - c0, float(np.isnan(W).mean())
 
 
 def benchmarks() -> list[dict]:
@@ -164,15 +165,19 @@ def benchmarks() -> list[dict]:
     grids = [(10, 10, 9), (20, 20, 18), (50, 50, 36)]
     points, walls = [], []
     for g in grids:
-        dt, gross = min((_w_hat_map_time(*g) for _ in range(3 if g[0] < 50 else 1)),
-                        key=lambda r: r[0])
+        # median of three runs (wall and CPU time: on a loaded machine the wall time
+        # is the CPU time shared with other work)
+        runs = np.array([_w_hat_map_time(*g) for _ in range(3)])
+        dt, cpu, gross = np.median(runs, axis=0)
         points.append(int(np.prod(g)))
         walls.append(dt)
-        row = {"name": f"W_hat map {g[0]}x{g[1]}x{g[2]} ({gross:.0%} gross slip)",
-               "value": dt, "unit": "s"}
+        row = {"name": f"W_hat map {g[0]}x{g[1]}x{g[2]} ({gross:.0%} gross slip), "
+                       f"median of 3", "value": float(dt), "unit": "s"}
         if g == (50, 50, 36):
-            row.update(target="< 5", ok=dt < 5)
+            row.update(target="< 5", ok=bool(dt < 5))
         rows.append(row)
+        rows.append({"name": f"W_hat map {g[0]}x{g[1]}x{g[2]}: CPU time (all threads), "
+                             f"median of 3", "value": float(cpu), "unit": "s"})
     rows.append({"name": "scaling exponent: W_hat map time ~ points^k",
                  "value": _exponent(points, walls), "unit": "1"})
     rows += _tamaas_row()

@@ -18,7 +18,7 @@ import numba
 import numpy as np
 import xarray as xr
 
-from slipcycle.halfspace.wmap import CHUNK, w_hat_map
+from slipcycle.halfspace.wmap import CHUNK, LANES, w_hat_map
 from slipcycle.io import CaseError, RunOutputs
 from slipcycle.io.sizes import check_memory, memory_limit
 from slipcycle.plot.halfspace import w_hat_cubic_law, w_hat_vs_phase
@@ -39,12 +39,14 @@ def map_memory_estimate(n_points: int, steps_per_cycle: int, n_sliders: int,
                         threads: int | None = None) -> float:
     """Bytes the map needs.
 
-    Ŵ on the grid (with its Dataset and netCDF copies and the order the points are shared
-    out in, ~40 B per point) and, per thread, one point's load path (~48 B per step: two
-    cycles and two assembly ramps), slider state (~64 B per slider) and the slider forces of
-    the first cycle at every chunk end (16 B per slider and chunk of
+    Ŵ on the grid (with its Dataset and netCDF copies, the order the points are shared
+    out in and the batches of lanes, ~48 B per point) and, per thread, the load paths of
+    :data:`~slipcycle.halfspace.wmap.LANES` points driven together (~48 B per step: two
+    cycles and two assembly ramps), their slider states (~64 B per slider) and the slider
+    forces of their first cycle at every chunk end (16 B per slider and chunk of
     :data:`~slipcycle.halfspace.wmap.CHUNK` steps). The unlumped bed of each P̂1 (~8 B per
-    slider and step) is small beside these.
+    slider and step) and the cosines of the cycles (8 B per phase and step) are small
+    beside these.
 
     Parameters
     ----------
@@ -63,8 +65,8 @@ def map_memory_estimate(n_points: int, steps_per_cycle: int, n_sliders: int,
     threads = numba.get_num_threads() if threads is None else threads
     steps = 2 * steps_per_cycle + 2 * 20
     chunks = steps_per_cycle // CHUNK + 1
-    return 40.0 * n_points + threads * (48.0 * steps + 64.0 * (n_sliders + 1)
-                                        + 16.0 * chunks * (n_sliders + 1))
+    return 48.0 * n_points + threads * LANES * (48.0 * steps + 64.0 * (n_sliders + 1)
+                                                + 16.0 * chunks * (n_sliders + 1))
 
 
 def parse_map_case(case):

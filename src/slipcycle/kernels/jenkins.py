@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["solve_tangential_force", "apply_increment"]
+__all__ = ["solve_tangential_force", "apply_increment", "drive_force_moving_limits"]
 
 _MAX_NEWTON = 60
 
@@ -217,3 +217,165 @@ def apply_increment(t, k, k_step, cap, dv, d, z, slip, slip_tol):
         t[i] = tn
         q += tn
     return q, n_slip, first
+
+
+@njit(cache=True)
+def drive_force_moving_limits(t, level, kn, kt, inv_kt, friction, U_path, T_path, U0, V0,
+                              V_out, Q_out, first_out, status, slip_tol):
+    """Drive L copies ("lanes") of one Jenkins bed with moving limits, each along its own
+    force-controlled path, over a common approach path; one sweep per step.
+
+    Element i engages at the approach U = s_i (``level``), has limit c_i = f k_i (U − s_i)₊
+    and stiffness κ_i; an element engaging inside a step (U linear within it) takes the
+    share (U − s_i)/(U − U_old) of ΔV. This is Jäger's slider bed of a half-space contact
+    (Jäger 1998; Ciavarella 1998), the bed that :func:`slipcycle.halfspace.kernels.drive_with`
+    drives, and each lane does exactly its arithmetic: the return map ``_clip`` of the
+    elements (the law of :func:`apply_increment`), the one-step root of
+    Σ clip(t_i + κ_i ΔV, ±c_i) = Q when no breakpoint lies before it and otherwise the
+    safeguarded Newton iteration of :func:`solve_tangential_force`, so every lane gives
+    the same bits as ``drive_with`` on its own.
+
+    What differs is the work: the limits and step stiffnesses, which depend only on the
+    approach, are computed once for all lanes; the sweep that returns step k's elements
+    also sets up step k + 1; and the lanes sit side by side in memory, so that the inner
+    loop over lanes runs in SIMD registers. Dissipation, slip and base displacement are
+    not booked (callers that need them use :func:`apply_increment`).
+
+    Parameters
+    ----------
+    t : (n, L) array
+        Element forces of every lane, updated in place.
+    level, kn, kt, inv_kt : (n,) arrays
+        Engagement approaches s_i, normal stiffnesses k_i, tangential stiffnesses κ_i and
+        1/κ_i.
+    friction : float
+        f.
+    U_path : (K,) array
+        Approach at each step (common to the lanes).
+    T_path : (K, L) array
+        Total tangential force Q of each lane at each step.
+    U0 : float
+        Approach before the first step.
+    V0 : (L,) array
+        Tangential displacement of each lane before the first step.
+    V_out, Q_out : (K, L) arrays
+        Tangential displacement and total force Σ t_i after each step (written).
+    first_out : (K, L) int array
+        Index of the lowest element slipping in each step (n if none); an element slips
+        when its trial force exceeds its limit by more than ``slip_tol`` times the limit.
+    status : (L,) int array
+        In: −1 for a lane to drive; a lane with any other value is not driven (ΔV = 0; its
+        state and outputs are not meaningful). Out: a lane that reaches
+        |Q| ≥ (1 − 1e-12) Σ c_i (gross slip) at step k gets k; its outputs up to step k − 1
+        are those of ``drive_with``, later ones and its state are not meaningful.
+    slip_tol : float
+    """
+    n, L = t.shape
+    K = U_path.size
+    cap = np.empty((2, n))
+    ke = np.empty((2, n))
+    V = V0.copy()
+    dv = np.zeros(L)
+    q0 = np.empty(L)
+    s0 = np.empty(L)
+    lo = np.empty(L)
+    hi = np.empty(L)
+    below = np.empty(L)
+    above = np.empty(L)
+    q = np.empty(L)
+    first = np.empty(L, np.int64)
+    U_old = U0
+    U = U_path[0]
+    for k in range(K + 1):
+        # one sweep: return the elements of step k − 1 by dv, set up step k
+        cur = k % 2
+        prev = 1 - cur
+        last = k == K
+        qmax = 0.0
+        q0[:] = 0.0
+        s0[:] = 0.0
+        lo[:] = 0.0
+        hi[:] = 0.0
+        below[:] = -np.inf
+        above[:] = np.inf
+        q[:] = 0.0
+        first[:] = n
+        for i in range(n):
+            if k > 0:
+                cp = cap[prev, i]
+                kp = ke[prev, i]
+                for p in range(L):
+                    x = t[i, p] + kp * dv[p]
+                    ti = _clip(x, cp)
+                    if cp > 0.0 and abs(x) - cp > slip_tol * cp and i < first[p]:
+                        first[p] = i
+                    t[i, p] = ti
+                    q[p] += ti
+            if last:
+                continue
+            gap = U - level[i]
+            c = friction * kn[i] * gap if gap > 0.0 else 0.0
+            cap[cur, i] = c
+            qmax += c
+            old_gap = U_old - level[i]
+            if gap > 0.0 and old_gap < 0.0:
+                kei = kt[i] * gap / (gap - old_gap)
+                inv = 1.0 / kei
+            else:
+                kei = kt[i]
+                inv = inv_kt[i]
+            ke[cur, i] = kei
+            for p in range(L):
+                ti = t[i, p]
+                if ti >= c:
+                    q0[p] += c
+                elif ti <= -c:
+                    q0[p] -= c
+                else:
+                    q0[p] += ti
+                    s0[p] += kei
+                b_lo = (-c - ti) * inv
+                b_hi = (c - ti) * inv
+                lo[p] = min(lo[p], b_lo)
+                hi[p] = max(hi[p], b_hi)
+                if c > 0.0:  # an element out of contact carries nothing: no breakpoint
+                    # reaching +c ahead, or leaving +c behind (0: at the limit now)
+                    if b_hi > 0.0:
+                        above[p] = min(above[p], b_hi)
+                    else:
+                        below[p] = max(below[p], b_hi)
+                    if b_lo < 0.0:
+                        below[p] = max(below[p], b_lo)
+                    else:
+                        above[p] = min(above[p], b_lo)
+        live = 0
+        for p in range(L):
+            if k > 0:
+                V[p] += dv[p]
+                V_out[k - 1, p] = V[p]
+                Q_out[k - 1, p] = q[p]
+                first_out[k - 1, p] = first[p]
+            dv[p] = 0.0
+            if last or status[p] != -1:
+                continue
+            target = T_path[k, p]
+            if target != 0.0 and abs(target) >= qmax * (1.0 - 1e-12):
+                status[p] = k
+                continue
+            live += 1
+            if qmax > 0.0:  # else nothing in contact and no load: nothing moves
+                # the first Newton step, taken when it provably lands on the root (no
+                # breakpoint between 0 and it); else the safeguarded iteration
+                r0 = q0[p] - target
+                d = 0.0 - r0 / s0[p] if s0[p] > 0.0 else np.nan
+                if abs(r0) <= 1e-13 * (qmax + abs(target)):
+                    d = 0.0
+                elif not (below[p] < d < above[p]):
+                    d, _ = _newton(t[:, p], ke[cur], cap[cur], target, 0.0, r0, s0[p],
+                                   lo[p], hi[p], qmax)
+                dv[p] = d
+        if live == 0:
+            return  # every lane stopped
+        U_old = U
+        if k + 1 < K:
+            U = U_path[k + 1]
