@@ -96,3 +96,24 @@ def test_block_refuses_bad_input_with_the_key():
         Block3D(width_x=0.02, width_y=0.02, height=0.01, E=E, nu=NU, contact_x=0.03,
                 contact_y=0.006)
     assert err.value.key == "contact_x"
+
+
+def test_nested_dissection_condensation_equals_minimum_degree(monkeypatch):
+    """The METIS-ordered one-factorisation Schur complement and load reactions agree with
+    the minimum-degree path (two factorisations) to round-off."""
+    import slipcycle.condensation as cond
+
+    pytest.importorskip("pymetis")
+    block = Block3D(width_x=0.02, width_y=0.02, height=0.01, E=E, nu=NU, contact_x=0.006,
+                    contact_y=0.006, elements=4, element="P1", radius=R)
+    nd = block_on_rigid_3d(block)
+    monkeypatch.setattr(cond, "nested_dissection", lambda K: None)
+    mmd = block_on_rigid_3d(block)
+    for name in ("A", "B", "C"):
+        M1, M2 = getattr(nd, name), getattr(mmd, name)
+        assert np.allclose(M1, M2, rtol=0, atol=1e-10 * np.abs(M2).max())
+    for case in ("normal", "tangential", "tangential2", "gap"):
+        for k in ("q", "p"):
+            ref = mmd.loads[case][k]
+            assert np.allclose(nd.loads[case][k], ref, rtol=0,
+                               atol=1e-10 * np.abs(mmd.C).max())

@@ -37,24 +37,19 @@ Johnson, K. L. (1985). *Contact Mechanics*, Cambridge University Press, §4.2 (H
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
+from skfem import MeshTet
 
-from slipcycle.condensation import schur_complement
 from slipcycle.errors import InputError
-from slipcycle.fe.assembly import default_formulation, stiffness
+from slipcycle.fe.contact3d import ELEMENTS_3D, Case3D, mesh_nodes, node_dofs_3d, reduce_contact_3d
 from slipcycle.fe.geometry import check_number, depth_grid, interface_grid
 from slipcycle.io.matrices import ReducedStiffness
 
 __all__ = ["Block3D", "block_mesh_3d", "node_dofs_3d", "reduce_on_rigid_flat",
            "block_on_rigid_3d"]
-
-ELEMENTS_3D = {"P1": ElementTetP1, "P2": ElementTetP2}
 
 #: the load cases of a body on a rigid flat (name, unit, top-face translation)
 TOP_CASES = (("normal", "m", (0.0, 0.0, -1.0)), ("tangential", "m", (1.0, 0.0, 0.0)),
@@ -130,22 +125,14 @@ def block_mesh_3d(block: Block3D) -> MeshTet:
     return MeshTet.init_tensor(x, y, z)
 
 
-def node_dofs_3d(basis: Basis) -> tuple[np.ndarray, np.ndarray]:
-    """DOF indices (n_nodes, 3) of (u_x, u_y, u_z) at every node and its coordinates (3, n).
-
-    Nodes are the vertices, then (P2) the edge mid-points.
-    """
-    parts = [basis.nodal_dofs]
-    if basis.edge_dofs.size:
-        parts.append(basis.edge_dofs)
-    dofs = np.concatenate(parts, axis=1).T
-    return dofs, basis.doflocs[:, dofs[:, 0]]
-
-
 def reduce_on_rigid_flat(mesh: MeshTet, *, E: float, nu: float, contact: Callable,
                          top: Callable, gap: Callable | None = None, element: str = "P2",
                          formulation: str = "auto", source: str = "") -> ReducedStiffness:
     """Reduce a tetrahedral body on a rigid flat z = const to its contact nodes.
+
+    A thin call of :func:`slipcycle.fe.contact3d.reduce_contact_3d` with one body, every
+    pair against the rigid flat (outward normal (0, 0, −1), t1 = x, t2 = y), the ``top``
+    nodes held and moved by the cases of :data:`TOP_CASES`.
 
     Parameters
     ----------
@@ -170,13 +157,9 @@ def reduce_on_rigid_flat(mesh: MeshTet, *, E: float, nu: float, contact: Callabl
     ReducedStiffness
         A (2N, 2N), B (N, 2N), C (N, N) (N/m), ``tangential_dims`` 2, node coordinates
         (N, 3) (m), outward normals (0, 0, −1) and tangents x, y, the load cases of
-        :data:`TOP_CASES` and ``gap`` (reactions, N per unit).
+        :data:`TOP_CASES` and ``gap`` (reactions, N per unit); nodes ordered by y, then x.
     """
-    t0 = time.perf_counter()
-    basis = Basis(mesh, ElementVector(ELEMENTS_3D[element]()))
-    form = default_formulation(element, nu) if formulation == "auto" else formulation
-    K = stiffness(basis, E, nu, 1.0, form)
-    dofs, xyz = node_dofs_3d(basis)
+    xyz = mesh_nodes(mesh, element).T
     is_contact = np.asarray(contact(xyz), bool)
     is_top = np.asarray(top(xyz), bool)
     if not is_contact.any():
@@ -186,43 +169,22 @@ def reduce_on_rigid_flat(mesh: MeshTet, *, E: float, nu: float, contact: Callabl
     order_c = np.lexsort((xyz[0, is_contact], xyz[1, is_contact]))
     cnodes = np.flatnonzero(is_contact)[order_c]
     N = cnodes.size
-    fixed = dofs[is_top].ravel()
-    tangential = dofs[cnodes, :2].ravel()          # node-major (t1, t2)
-    normal = dofs[cnodes, 2]
-    boundary = np.concatenate([tangential, normal])
-    taken = np.zeros(basis.N, bool)
-    taken[fixed] = True
-    taken[boundary] = True
-    interior = np.flatnonzero(~taken)
-    keep = np.concatenate([interior, boundary])
-    # load cases: the top face moved rigidly, everything else held (u = 0 at contact)
-    F = np.zeros((basis.N, len(TOP_CASES)))
-    for k, (_, _, move) in enumerate(TOP_CASES):
-        u0 = np.zeros(basis.N)
-        for comp in range(3):
-            u0[dofs[is_top, comp]] = move[comp]
-        F[:, k] = -(K @ u0)
-    Kr = sp.csr_matrix(K)[keep][:, keep]
-    t1 = time.perf_counter()
-    S, r = schur_complement(Kr, interior.size, F[keep])
-    t2 = time.perf_counter()
-    A = S[:2 * N, :2 * N]
-    B = S[2 * N:, :2 * N]
-    C = S[2 * N:, 2 * N:]
     g = np.zeros(N) if gap is None else np.asarray(gap(xyz[:, cnodes]), float)
     if np.any(g < 0.0):
         raise ValueError("the initial gap must be ≥ 0")
-    loads = {name: {"q": r[:2 * N, k].copy(), "p": r[2 * N:, k].copy()}
-             for k, (name, _, _) in enumerate(TOP_CASES)}
-    loads["gap"] = {"q": -(B.T @ g), "p": -(C @ g)}
-    coords = xyz[:, cnodes].T.copy()
-    normals = np.tile([0.0, 0.0, -1.0], (N, 1))
-    tangents = np.tile([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], (N, 1, 1))
-    info = (f"{source} [{element}/{form}, {basis.N} dofs, {N} contact nodes, "
-            f"assembly {t1 - t0:.2f} s, condensation {t2 - t1:.2f} s]")
-    return ReducedStiffness(A=A, B=B, C=C, tangential_dims=2, nodes=cnodes,
-                            coordinates=coords, normals=normals, tangents=tangents,
-                            loads=loads, source=info.strip())
+    fixed = np.zeros((xyz.shape[1], 3), bool)
+    fixed[is_top] = True
+    cases = []
+    for name, unit, move in TOP_CASES:
+        u = np.zeros((xyz.shape[1], 3))
+        u[is_top] = move
+        cases.append(Case3D(name, unit, displacement=u))
+    pairs = np.column_stack([cnodes, np.full(N, -1)])
+    return reduce_contact_3d(mesh, materials=[(E, nu)], pairs=pairs,
+                             normals=(0.0, 0.0, -1.0),
+                             tangents=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), fixed=fixed,
+                             gap=g, cases=cases, element=element,
+                             formulation=formulation, source=source)
 
 
 def block_on_rigid_3d(block: Block3D) -> ReducedStiffness:
