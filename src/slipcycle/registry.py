@@ -35,7 +35,7 @@ class ModelEntry:
     ----------
     runner : str or None
         ``"module:function"`` of ``run_case(case) -> RunOutputs``; None for a model that
-        ``slipcycle run`` does not solve (``fe`` is reduced, not run).
+        ``slipcycle run`` does not solve.
     validator : str or None
         ``"module:function"`` that reads and checks a case of this model without solving.
     commands : tuple of str
@@ -79,7 +79,7 @@ MODELS: dict[str, ModelEntry] = {
         result="slipcycle.discrete.case:DiscreteResult"),
     "discrete3d": ModelEntry(
         "slipcycle.discrete3d.case:run_case",
-        "slipcycle.discrete3d.case:read_discrete3d_case", ("run", "sweep"),
+        "slipcycle.discrete3d.case:read_discrete3d_case", ("run", "sweep", "basins"),
         solver="slipcycle.discrete3d.case:solve_case",
         model_solver="slipcycle.discrete3d.case:solve_model",
         model_types=("slipcycle.discrete3d.case:Discrete3DCase",
@@ -92,7 +92,18 @@ MODELS: dict[str, ModelEntry] = {
         model_solver="slipcycle.rods.case:solve_model",
         model_types=("slipcycle.rods.case:RodsCase",),
         result="slipcycle.rods.case:RodsResult"),
-    "fe": ModelEntry(None, "slipcycle.fe.model:build_problem", ("reduce",)),
+    "fe": ModelEntry(
+        "slipcycle.joints.fe_run:run_case", "slipcycle.joints.fe_run:read_fe_case",
+        ("run", "reduce", "sweep"),
+        solver="slipcycle.joints.fe_run:solve_case",
+        result="slipcycle.joints.fe_run:FEResult"),
+    "lap_joint": ModelEntry(
+        "slipcycle.joints.lap_joint_case:run_case",
+        "slipcycle.joints.lap_joint_case:read_lap_joint_case", ("run",),
+        solver="slipcycle.joints.lap_joint_case:solve_case",
+        model_solver="slipcycle.joints.lap_joint_case:solve_model",
+        model_types=("slipcycle.joints.lap_joint_case:LapJointCase",),
+        result="slipcycle.joints.lap_joint_study:LapJointResult"),
 }
 
 #: models that ``slipcycle run`` (and ``sweep``) solve -> their ``run_case``

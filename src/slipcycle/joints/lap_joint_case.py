@@ -1,0 +1,296 @@
+"""``model = "lap_joint"``: case file → bolted lap joint → every tightening protocol.
+
+:func:`read_lap_joint_case` reads and checks every key before any computation (each bad
+key is one :class:`~slipcycle.io.CaseError`); :func:`solve_model` reduces the joint
+(:func:`slipcycle.fe.lap_joint.lap_joint_model`) on the case's mesh and on the coarser
+meshes of ``[lap_joint.convergence]``, and runs the study
+(:func:`slipcycle.joints.lap_joint_study.lap_joint_study`). Keys (docs/lap_joint.md):
+
+- ``[lap_joint]``: the fields of :class:`slipcycle.fe.lap_joint.LapJoint` (geometry [m],
+  material [Pa], bolts, mesh size at the interface [m]), ``friction`` and
+  ``accept_ill_posed`` (run even if f reaches the critical friction coefficient);
+- ``[lap_joint.loading]``: ``preload`` [N] per bolt, ``service_amplitude`` [N];
+- ``[lap_joint.protocols]``: ``names`` (standard patterns ``sequential``, ``star``,
+  ``reversed``, ``simultaneous``, or labels of ``orders``) and optional ``orders`` (per
+  protocol a list of bolt numbers, or lists of numbers tightened together);
+- ``[lap_joint.convergence]``: ``coarsening`` (factors > 1 of the mesh size of extra,
+  coarser meshes; ``[]``: the case's mesh only), ``rtol``;
+- ``[run]``: ``cycles``, ``steps_per_cycle``, ``steady_tol``, ``min_cycles``,
+  ``step_tolerance``, ``difference_tol``;
+- ``[output]``: ``fields`` (``["xdmf"]``, ``["xdmf", "pvd"]`` or ``[]``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+from dataclasses import dataclass
+
+from slipcycle.errors import InputError
+from slipcycle.io import Case, CaseError, RunOutputs, Section
+from slipcycle.io.case import read_steady_tol
+from slipcycle.joints.lap_joint_study import (
+    STANDARD_PROTOCOLS,
+    JointContact,
+    LapJointResult,
+    Protocol,
+    StudySettings,
+    lap_joint_study,
+    standard_protocol,
+)
+
+__all__ = ["LapJointCase", "read_lap_joint_case", "joint_contact", "solve_model",
+           "solve_case", "run_case", "FIELD_FORMATS"]
+
+FIELD_FORMATS = ("xdmf", "pvd")
+#: keys of ``[lap_joint]`` that are not fields of LapJoint
+_STUDY_KEYS = ("friction", "accept_ill_posed")
+
+
+@dataclass(frozen=True)
+class LapJointCase:
+    """A validated tightening-order study of a bolted lap joint.
+
+    Attributes
+    ----------
+    joint : slipcycle.fe.lap_joint.LapJoint
+        Geometry, material, bolts and the (finest) mesh size.
+    protocols : tuple of Protocol
+    settings : StudySettings
+    coarsening : tuple of float
+        Factors (> 1, decreasing) of the mesh size of the coarser meshes of the mesh
+        convergence; empty: the joint's mesh only.
+    fields : tuple of str
+        Field formats written per protocol (``"xdmf"``, ``"pvd"``).
+    """
+
+    joint: typing.Any
+    protocols: tuple
+    settings: StudySettings
+    coarsening: tuple = ()
+    fields: tuple = ("xdmf",)
+
+    def __post_init__(self):
+        factors = tuple(float(f) for f in self.coarsening)
+        if any(f <= 1.0 for f in factors) or len(set(factors)) != len(factors):
+            raise InputError("coarsening", f"factors must be distinct and > 1, got {factors}")
+        object.__setattr__(self, "coarsening", tuple(sorted(factors, reverse=True)))
+        bad = [f for f in self.fields if f not in FIELD_FORMATS]
+        if bad:
+            raise InputError("fields", f"unknown field format {bad[0]!r} (known: "
+                             f"{', '.join(FIELD_FORMATS)})")
+        for p in self.protocols:
+            p.check(self.joint.bolt_count)
+
+
+def _lap_joint():
+    """slipcycle.fe.lap_joint (imported on first use: gmsh and scikit-fem load with it)."""
+    from slipcycle.fe import lap_joint
+
+    return lap_joint
+
+
+_REQUIRED = object()
+
+
+def _field_reader(sec: Section, f: dataclasses.Field):
+    """Read the ``[lap_joint]`` key of LapJoint field ``f`` by the type of its default
+    (or its annotation); the default where the key is absent."""
+    name = f.name
+    if f.default is not dataclasses.MISSING:
+        default = f.default
+    elif f.default_factory is not dataclasses.MISSING:
+        default = f.default_factory()
+    else:
+        default = _REQUIRED
+    if not sec.has(name):
+        if default is _REQUIRED:
+            raise sec.error(name, "required key is missing")
+        return default
+    kind = _kind(f, default)
+    if kind is bool:
+        return sec.bool(name)
+    if kind is int:
+        return sec.int(name)
+    if kind is str:
+        return sec.string(name)
+    if kind in (tuple, list):   # bolt positions: pairs (x, y) [m]
+        return tuple(tuple(row) for row in sec.array(name, shape=(None, 2)).tolist())
+    return sec.float(name)
+
+
+def _kind(f: dataclasses.Field, default) -> type:
+    """The Python type of a LapJoint field: from its default, else its annotation."""
+    if default is not None and default is not _REQUIRED:
+        return type(default)
+    ann = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", "float")
+    first = ann.split("|")[0].strip()
+    return {"int": int, "bool": bool, "str": str, "tuple": tuple}.get(first, float)
+
+
+def _read_joint(sec: Section):
+    """LapJoint from ``[lap_joint]``; its own InputError under the key of the field."""
+    mod = _lap_joint()
+    kw = {f.name: _field_reader(sec, f) for f in dataclasses.fields(mod.LapJoint) if f.init}
+    try:
+        return mod.LapJoint(**kw)
+    except InputError as exc:
+        key = sec.key(exc.key) if exc.key in kw else sec.prefix
+        raise CaseError(key, exc.problem) from None
+
+
+def _order(ps: Section, key: str, raw, bolt_count: int) -> tuple:
+    """One tightening order: bolt numbers, or lists of numbers tightened together."""
+    if not isinstance(raw, list) or not raw:
+        raise ps.error(key, f"each order must be a non-empty list of bolt numbers (or of "
+                            f"lists of them), got {raw!r}")
+    steps = []
+    for item in raw:
+        group = item if isinstance(item, list) else [item]
+        if not group or any(isinstance(b, bool) or not isinstance(b, int) for b in group):
+            raise ps.error(key, f"bolt numbers must be integers, got {item!r}")
+        steps.append(tuple(group))
+    return tuple(steps)
+
+
+def _read_protocols(ps: Section, bolt_count: int) -> tuple:
+    names_raw = ps.data.get("names", list(STANDARD_PROTOCOLS))
+    ps._used.add("names")
+    if (not isinstance(names_raw, list) or not names_raw
+            or not all(isinstance(n, str) and n for n in names_raw)):
+        raise ps.error("names", f"must be a non-empty list of protocol names, got "
+                                f"{names_raw!r}")
+    if len(set(names_raw)) != len(names_raw):
+        raise ps.error("names", f"protocol names must be distinct, got {names_raw}")
+    orders = ps.data.get("orders")
+    ps._used.add("orders")
+    protocols = []
+    if orders is None:
+        for name in names_raw:
+            if name not in STANDARD_PROTOCOLS:
+                raise ps.error("names", f"{name!r} is no standard protocol (known: "
+                                        f"{', '.join(STANDARD_PROTOCOLS)}); give its order "
+                                        "in orders")
+            protocols.append(standard_protocol(name, bolt_count))
+    else:
+        if not isinstance(orders, list) or len(orders) != len(names_raw):
+            raise ps.error("orders", f"must be a list of {len(names_raw)} orders, one per "
+                                     "name")
+        for name, raw in zip(names_raw, orders, strict=True):
+            protocols.append(Protocol(name, _order(ps, "orders", raw, bolt_count)))
+    for p in protocols:
+        try:
+            p.check(bolt_count)
+        except InputError as exc:
+            raise ps.error("orders" if orders is not None else "names", exc.problem) from None
+    return tuple(protocols)
+
+
+def read_lap_joint_case(case: Case) -> LapJointCase:
+    """Read and validate every key of a ``lap_joint`` case; no computation beyond checks.
+
+    Parameters
+    ----------
+    case : Case
+
+    Returns
+    -------
+    LapJointCase
+
+    Raises
+    ------
+    CaseError
+        Naming the offending key and the problem.
+    """
+    sec = case.section("lap_joint")
+    friction = sec.float("friction", gt=0.0)
+    accept = sec.bool("accept_ill_posed", False)
+    ld = sec.table("loading")
+    ps = sec.table("protocols", {})
+    cv = sec.table("convergence", {})
+    geometry = Section({k: v for k, v in sec.data.items()
+                        if k not in ("loading", "protocols", "convergence", *_STUDY_KEYS)},
+                       sec.prefix, sec.base_dir)
+    joint = _read_joint(geometry)
+    geometry.finish()
+    sec._used.update(geometry._used)
+
+    preload = ld.float("preload", gt=0.0)
+    service = ld.float("service_amplitude", ge=0.0)
+    ld.finish()
+    protocols = _read_protocols(ps, joint.bolt_count)
+    ps.finish()
+    coarsening = cv.array("coarsening", [2.0], shape=(None,), gt=1.0)
+    if len(set(coarsening.tolist())) != coarsening.size:
+        raise cv.error("coarsening", f"factors must be distinct, got {coarsening.tolist()}")
+    rtol = cv.float("rtol", 0.05, gt=0.0, lt=1.0)
+    cv.finish()
+
+    rn = case.section("run", required=False)
+    run = {"cycles": rn.int("cycles", 40, ge=1),
+           "steps_per_cycle": rn.int("steps_per_cycle", 40, ge=4),
+           "tol": read_steady_tol(rn, 1e-8),
+           "min_cycles": rn.int("min_cycles", 1, ge=1),
+           "step_tol": rn.float("step_tolerance", 1e-4, gt=0.0, lt=1.0)}
+    difference_tol = rn.float("difference_tol", 1e-3, gt=0.0, lt=1.0)
+    out = case.section("output", required=False)
+    fields = out.data.get("fields", ["xdmf"])
+    out._used.add("fields")
+    if isinstance(fields, str):
+        fields = [fields]
+    if not isinstance(fields, list) or any(f not in FIELD_FORMATS for f in fields):
+        raise out.error("fields", f"must be a list of {', '.join(FIELD_FORMATS)} (or [] for "
+                                  f"no field files), got {fields!r}")
+    case.finish()
+    settings = StudySettings(preload=preload, service_amplitude=service, friction=friction,
+                             run=run, difference_tol=difference_tol, mesh_rtol=rtol,
+                             accept_ill_posed=accept)
+    return LapJointCase(joint, protocols, settings, tuple(coarsening.tolist()),
+                        tuple(fields))
+
+
+def joint_contact(joint) -> JointContact:
+    """Reduce ``joint`` (:class:`slipcycle.fe.lap_joint.LapJoint`) to its contact nodes.
+
+    Returns
+    -------
+    JointContact
+        The reduced stiffness with the bolt and service load cases, node areas, bolt
+        regions and the node spacing (the joint's interface mesh size) [m].
+    """
+    model = _lap_joint().lap_joint_model(joint)
+    return JointContact(model.reduced, model.node_area, model.bolt_region,
+                        float(model.spacing), dict(model.description))
+
+
+def solve_model(lc: LapJointCase, *, progress=None) -> LapJointResult:
+    """Reduce the joint on every mesh (coarse → fine) and run every protocol.
+
+    Parameters
+    ----------
+    lc : LapJointCase
+    progress : callable, optional
+        ``progress(done, total)`` after each protocol run.
+
+    Returns
+    -------
+    LapJointResult
+    """
+    if not isinstance(lc, LapJointCase):
+        raise TypeError(f"expected a LapJointCase, not {type(lc).__name__}")
+    joints = [dataclasses.replace(lc.joint, mesh_size=lc.joint.mesh_size * f)
+              for f in lc.coarsening] + [lc.joint]
+    contacts = [joint_contact(j) for j in joints]
+    return lap_joint_study(contacts, lc.protocols, lc.settings, fields=lc.fields,
+                           progress=progress)
+
+
+def solve_case(case: Case, *, progress=None) -> LapJointResult:
+    """Validate a ``lap_joint`` case completely, then solve it."""
+    return solve_model(read_lap_joint_case(case), progress=progress)
+
+
+def run_case(case: Case) -> RunOutputs:
+    """``solve_case(case).to_outputs()``."""
+    return solve_case(case).to_outputs()
+
