@@ -10,12 +10,8 @@ convergence of each protocol's dissipation, with a warning where it is not conve
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:  # pragma: no cover
-    from slipcycle.joints.lap_joint_study import LapJointResult
 
 __all__ = ["report_markdown", "verdict"]
 
@@ -31,7 +27,7 @@ def _g(x, digits: int = 4) -> str:
     return f"{x:.{digits}g}"
 
 
-def verdict(result: LapJointResult) -> str:
+def verdict(result) -> str:
     """One paragraph: do the tightening orders give different steady dissipation?"""
     d = result.dissipation
     names = [p.name for p in result.protocols]
@@ -66,7 +62,7 @@ def verdict(result: LapJointResult) -> str:
     return text
 
 
-def report_markdown(result: LapJointResult) -> str:
+def report_markdown(result) -> str:
     """The report of ``result`` as Markdown text (figures linked from ``figures/``)."""
     s = result.settings
     c = result.contact
