@@ -287,3 +287,27 @@ def test_docs_quote_the_small_joint_and_melan_numbers_these_tests_compute(small_
     melan = re.search(r"dissipation is the same,\s+([0-9.e-]+) J per cycle", text)
     assert melan is not None
     assert float(melan.group(1)) == pytest.approx(decoupled_study.dissipation[0], rel=1e-3)
+
+
+@pytest.mark.slow
+def test_docs_table_of_the_shipped_example_is_what_slipcycle_run_gives():
+    """The second table of docs/lap_joint.md: the shipped bolted_lap_joint.toml, every
+    protocol on both meshes (dissipation per cycle and per bolt region, stuck area)."""
+    from slipcycle.examples import example_path
+
+    s = slipcycle.run(example_path("bolted_lap_joint.toml")).summary()
+    text = DOCS.read_text(encoding="utf-8")
+    table = text[text.index("**The shipped example**"):]
+    coarse = np.asarray(s["mesh_dissipation"], float)[int(np.argmax(s["mesh_spacing"]))]
+    for k, name in enumerate(s["protocols"]):
+        row = re.search(rf"^\| {name}(?: \([^|]*\))? \| [a-z ]+ \| ([0-9.]+) \| "
+                        rf"([0-9., ]+) \| ([0-9.]+) \| ([0-9.]+) \|", table, re.M)
+        assert row is not None, name
+        assert float(row.group(1)) * 1e-6 == pytest.approx(
+            s["protocol_dissipation_per_cycle"][k], rel=1e-4), name
+        regions = [float(v) * 1e-6 for v in row.group(2).split(",")]
+        np.testing.assert_allclose(regions, s["protocol_dissipation_per_region"][k],
+                                   rtol=1e-3, err_msg=name)
+        assert float(row.group(3)) * 1e-6 == pytest.approx(s["protocol_stuck_area"][k],
+                                                           rel=1e-3), name
+        assert float(row.group(4)) * 1e-6 == pytest.approx(coarse[k], rel=1e-4), name

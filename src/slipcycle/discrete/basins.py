@@ -595,22 +595,9 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
     return AnalysisStatus(result.to_outputs(), int(done.size), int(done.size), result)
 
 
-@dataclass(frozen=True)
-class AnalysisStatus(StudyStatus):
-    """:class:`~slipcycle.sweep.dataset.StudyStatus` of a resumable analysis, with its result.
-
-    Attributes
-    ----------
-    outputs : RunOutputs or None
-        ``result.to_outputs()`` once every cell is done; None while cells are missing.
-    cells_done, cells_total : int
-        Computed cells of the store, and all of them.
-    result : StudyResult or None
-        The analysis result once every cell is done (:class:`BasinsResult`,
-        :class:`~slipcycle.discrete.shakedown_study.ShakedownResult`).
-    """
-
-    result: StudyResult | None = None
+#: the status of a resumable analysis (:class:`~slipcycle.sweep.dataset.StudyStatus`, its
+#: ``result`` set once every cell is done)
+AnalysisStatus = StudyStatus
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)

@@ -43,7 +43,7 @@ from slipcycle.result import StudyResult
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
-__all__ = ["STEADY_CODES", "Basins3DResult", "Basins3DStatus", "basins3d_study",
+__all__ = ["STEADY_CODES", "Basins3DResult", "basins3d_study",
            "read_protocols3d", "run_record3d", "start_scale", "load_discrete3d_case"]
 
 #: class codes of the study's ``steady_state`` (same order as the 2-D model's)
@@ -198,7 +198,7 @@ def basins3d_study(case: Case, out, *, grid: int | None = None, random: int | No
                    protocols: Path | None = None, v1_range: str | None = None,
                    v2_range: str | None = None, lam: float | None = None, seed: int = 0,
                    workers: int | None = None, scheduler=None, resume: bool = False,
-                   progress: bool = True, stop_after: int | None = None) -> Basins3DStatus:
+                   progress: bool = True, stop_after: int | None = None) -> StudyStatus:
     """Steady state (class, dissipation per cycle) of a ``discrete3d`` case over initial
     conditions.
 
@@ -224,7 +224,7 @@ def basins3d_study(case: Case, out, *, grid: int | None = None, random: int | No
 
     Returns
     -------
-    Basins3DStatus
+    StudyStatus
         ``result`` (:class:`Basins3DResult`) and ``outputs`` once every cell is done.
 
     Raises
@@ -279,19 +279,11 @@ def basins3d_study(case: Case, out, *, grid: int | None = None, random: int | No
     wall = time.perf_counter() - t0
     done = store.done()
     if not done.all():
-        return Basins3DStatus(None, int(done.sum()), int(done.size))
+        return StudyStatus(None, int(done.sum()), int(done.size))
     result = Basins3DResult(wall_time_s=wall, mode=mode, lam=lam, n_nodes=n,
                             data=store.read(), store=store, axes=tuple(axes),
                             start_scale=scale)
-    return Basins3DStatus(result.to_outputs(), int(done.size), int(done.size), result)
-
-
-@dataclass(frozen=True)
-class Basins3DStatus(StudyStatus):
-    """:class:`~slipcycle.sweep.dataset.StudyStatus` of :func:`basins3d_study`, with its
-    :class:`Basins3DResult` once every cell is done (None before)."""
-
-    result: StudyResult | None = None
+    return StudyStatus(result.to_outputs(), int(done.size), int(done.size), result)
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)

@@ -28,11 +28,15 @@ class StudyStatus:
         Summary, Dataset and figures once every cell is done; None while cells are missing.
     cells_done, cells_total : int
         Computed cells of the store, and all of them.
+    result : StudyResult or None
+        The study's result object once every cell is done (an analysis: basins, λ scans);
+        None before, and for a plain case sweep.
     """
 
     outputs: RunOutputs | None
     cells_done: int
     cells_total: int
+    result: object | None = None
 
     @property
     def complete(self) -> bool:
