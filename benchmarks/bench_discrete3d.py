@@ -5,7 +5,11 @@ of 60 s to the steady state in ≤ 50 cycles of 100 load samples is 1.2 s per cy
 2-core machine), the full run to the steady state when a cycle is fast enough for it to
 take about a minute, and the cost per load-step solve against N (100 … 2000) with the
 fitted exponent. Times are CPU seconds (one BLAS thread), the quiet-machine estimate on a
-shared machine; the wall times are kept beside them (``wall_s``).
+shared machine; the wall times are kept beside them (``wall_s``). The full run to the
+steady state (``discrete3d_2000_nodes_to_steady_state``) is always run: its value is the
+wall time (CPU beside it), with the steady-state class, the cycles run and the
+extrapolation jumps of the accelerated cycle loop (``simulate3d``); plain cycling of this
+system creeps toward its periodic state by a factor of only about 0.88 per cycle.
 
 The FE-like system is the 2-D benchmark's ``fe_like`` (bench_discrete.py) with two
 tangential directions per node: A = A₁ ⊗ [[1, 0.1], [0.1, 1]], B couples the normal
@@ -51,7 +55,8 @@ def case(n: int):
     return system, load
 
 
-def steady_time(n: int, cycles: int = 50, steps: int = 100, step_tol: float = 1e-4):
+def steady_time(n: int, cycles: int = 50, steps: int = 100, step_tol: float = 1e-4,
+                accelerate: bool = True):
     """(wall, CPU) seconds of a run to the steady state (at most ``cycles``) and its result.
 
     CPU time (``time.process_time``, one BLAS thread) is the quiet-machine estimate on a
@@ -59,7 +64,7 @@ def steady_time(n: int, cycles: int = 50, steps: int = 100, step_tol: float = 1e
     system, load = case(n)
     t0, c0 = time.perf_counter(), time.process_time()
     res = simulate3d(system, load, cycles=cycles, steps_per_cycle=steps, tol=1e-6,
-                     step_tol=step_tol, record=False)
+                     step_tol=step_tol, record=False, accelerate=accelerate)
     return time.perf_counter() - t0, time.process_time() - c0, res
 
 
@@ -75,11 +80,6 @@ def benchmarks() -> list[dict]:
     # small dense solves: one BLAS thread avoids contention on a shared 2-core machine
     with threadpool_limits(limits=1, user_api="blas"):
         return _rows()
-
-
-#: the full run to the steady state is a row when one cycle takes less than this (CPU s):
-#: 50 cycles then fit in about a minute
-FULL_RUN_MAX_CYCLE = 1.3
 
 
 def _rows() -> list[dict]:
@@ -102,11 +102,14 @@ def _rows() -> list[dict]:
                  "wall_s": wall / max(res.cycles_run, 1),
                  "steady_state": res.steady_state, "cycles_run": res.cycles_run,
                  "slipping_nodes": len(res.slipping_nodes)})
-    if per_cycle <= FULL_RUN_MAX_CYCLE:
-        wall, cpu, res = steady_time(2000, cycles=50)
-        rows.append({"name": "discrete3d_2000_nodes_to_steady_state", "value": cpu,
-                     "unit": "CPU s", "target": 60.0, "ok": cpu <= 60.0, "wall_s": wall,
-                     "steady_state": res.steady_state, "cycles_run": res.cycles_run})
+    # the full run to the steady state (≤ 50 cycles of 100 samples) against 60 s wall
+    wall, cpu, res = steady_time(2000, cycles=50)
+    rows.append({"name": "discrete3d_2000_nodes_to_steady_state", "value": wall,
+                 "unit": "wall s", "target": 60.0,
+                 "ok": bool(wall <= 60.0 and res.steady_converged), "cpu_s": cpu,
+                 "steady_state": res.steady_state, "cycles_run": res.cycles_run,
+                 "residual": res.residual, "jumps": res.jumps,
+                 "jumps_undone": res.jumps_undone})
     return rows
 
 

@@ -8,6 +8,35 @@ repeats within ``tol`` (``shakedown`` if no node slips in that cycle, else
 ``cyclic_slip``), or the per-cycle drift repeats (``ratcheting``), or ``cycles`` is
 reached (``not_converged``). A node "slips" in the last cycle when its slip length
 ∮|dv_j| exceeds max(100 tol, 1e-9) × the displacement scale (Barber 2012, §3).
+
+Acceleration. Near a periodic state the start-of-cycle states x_c of plain cycling
+approach their limit geometrically (a contraction of the cycle map P, x_{c+1} = P(x_c),
+whose linearisation about the periodic state has spectral radius < 1); with weak
+damping of the slip pattern the ratio is close to 1 and tol is reached only after many
+cycles. Once the cycles' pattern (the set of nodes that slip, the set that separate, the
+rest stuck) repeats, the limit is extrapolated from the last states by reduced rank
+extrapolation (Eddy 1979; Mešina 1977; Sidi, Ford & Smith, SIAM J. Numer. Anal. 1986):
+the combination x* = Σ γ_i x_{i+1}, Σ γ_i = 1, that minimises |Σ γ_i (x_{i+1} − x_i)|,
+exact for a linear map with k+1 differences when the error lies in k eigen-directions.
+The steady state is a set (the stuck nodes' slips are any values their cones admit,
+Barber 2012), and the member plain cycling reaches is selected by the history; the
+extrapolation keeps it: a node stuck in every cycle of the sequence has exactly the same
+slip in all its states, hence the same in x*, and only the components that plain cycling
+moves are moved. The jump is tried only in the geometric regime (the last changes
+shrink by ratios agreeing within 10 %). x* is then validated by plain cycles from it:
+it is accepted only through the ordinary test — a cycle reproduces its start within
+``tol`` — and the jump is undone (cycling resumes from the state before it) if the next
+cycle's change is not smaller than the last plain change, if in it a node slips or opens
+that was stuck and closed in every cycle of the sequence (its memory would change), or
+if plain cycling after it stalls (the largest change of 4 cycles above 0.8 × that of the
+4 before; acceleration then ends). The accepted state is therefore a fixed point of the
+cycle map to the same tolerance as plain cycling's, in the same member of the set.
+
+The cycle map is that of the discretised evolution, whose step control makes it only
+piecewise smooth: its refinement decisions change the state by up to about ``step_tol``
+× the displacement scale, and below that level plain cycling can settle on a small
+periodic orbit (seen with period 4, of amplitude 0.2–0.4 ``step_tol``) instead of a
+fixed point, and a ``tol`` well below ``step_tol`` may not be reached.
 """
 
 from __future__ import annotations
@@ -86,6 +115,9 @@ class SteadyResult3D:
     normal_work: float = 0.0
     solver_stats: dict = field(default_factory=dict)
     unresolved_steps: int = 0
+    #: extrapolation jumps of the start-of-cycle state (accepted, undone)
+    jumps: int = 0
+    jumps_undone: int = 0
 
     @property
     def dissipation_per_cycle(self) -> float:
@@ -143,7 +175,8 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                steps_per_cycle: int = 100, initial_slip: np.ndarray | None = None,
                protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,
                step_tol: float = 1e-7, record: bool = True, adaptive: bool = True,
-               substeps: int = 1, extrapolate: bool = True) -> SteadyResult3D:
+               substeps: int = 1, extrapolate: bool = True, accelerate: bool = True,
+               accel_order: int = 3) -> SteadyResult3D:
     """Run load cycles to the steady state.
 
     Parameters
@@ -170,6 +203,13 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
         Step doubling, or ``substeps`` fixed steps per load interval.
     extrapolate : bool
         Richardson extrapolation of smooth doubled steps.
+    accelerate : bool
+        Extrapolate the start-of-cycle state to the limit of plain cycling once the
+        pattern of slipping / separated / stuck nodes repeats, validated by the next
+        cycle (module docstring); False: plain cycling.
+    accel_order : int
+        Number k of differences (beyond one) the extrapolation combines; it is applied
+        after k + 1 cycles with the same pattern.
 
     Returns
     -------
@@ -198,6 +238,14 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     state, residual, totals = "not_converged", np.inf, None
     ratchet = np.zeros(2 * n)
     unresolved = 0
+    # acceleration: ``seq`` the start states of the current run of plain cycles with one
+    # pattern (seq[i+1] = P(seq[i])), ``pattern`` that pattern, ``pending`` the state
+    # before an unvalidated jump and the last plain change
+    seq, pattern, pending = [evo.x.copy()], None, None
+    jumps = undone = 0
+    plain_from = 0          # starts[plain_from:] are successive plain cycles
+    res_prev = np.inf
+    probation = None        # (state before the last jump, residuals since it)
     for c in range(cycles):
         totals = evo.follow(theta, vals, record=record)
         evo.resync()
@@ -213,12 +261,46 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
         xscale = max(disp_scale, float(np.max(np.abs(np.array(starts[-2:])))))
         d1 = starts[-1] - starts[-2]
         residual = float(np.max(np.abs(d1))) / xscale
+        cyc_tol = max(100 * tol, 1e-9) * xscale
+        pat = np.concatenate([totals.slip_length > cyc_tol, totals.separated])
+        stalled = False
+        if probation is not None and residual > tol:
+            hist = probation[1]
+            hist.append(residual)
+            # after a jump plain cycling must keep converging: over the last 4 cycles the
+            # largest change at most 0.8 × that of the 4 before (a ratio ≤ 0.94 per
+            # cycle); a stall (e.g. a small periodic orbit of the discretised cycle map
+            # near the jumped state) undoes the jump and ends the acceleration
+            stalled = len(hist) >= 8 and max(hist[-4:]) > 0.8 * max(hist[-8:-4])
+        if pending is not None or stalled:
+            if pending is not None:
+                x_before, res_before, pat_before = pending
+            else:
+                x_before, res_before, pat_before = probation[0], -np.inf, pattern
+                accelerate = False
+            pending = None
+            if stalled or residual > tol and (residual >= res_before
+                                              or np.any(pat & ~pat_before)):
+                # the jump did not bring the state closer to a periodic one, or a node
+                # stuck and closed in every cycle of the sequence slipped or opened (its
+                # memory would change: another member of the steady set): undo it and
+                # resume plain cycling from the state before it. (A node whose slip per
+                # cycle was dying out may stop: plain cycling does the same in the limit.)
+                undone += 1
+                probation = None
+                evo.x = x_before.copy()
+                evo.resync()
+                starts[-1] = evo.x.copy()
+                seq, pattern, plain_from, res_prev = [evo.x.copy()], None, len(starts) - 1, \
+                    np.inf
+                continue
         if c + 1 < min_cycles:
+            res_prev = residual
             continue
         if residual <= tol:
             state = "steady"
             break
-        if len(starts) >= 3:
+        if len(starts) - plain_from >= 3:
             d0 = starts[-2] - starts[-3]
             rres = float(np.max(np.abs(d1 - d0))) / xscale
             # a drift that repeats is ratcheting; one shrinking by a constant factor is a
@@ -228,6 +310,29 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                 residual = rres
                 state = "ratcheting"
                 break
+        if pattern is None or not np.array_equal(pat, pattern):
+            seq, pattern = [starts[-2], starts[-1]], pat
+        else:
+            seq.append(starts[-1])
+        shrinking = residual < res_prev
+        res_prev = residual
+        # the extrapolation is tried in the geometric regime only (the last changes
+        # shrink by a steady ratio); after a jump that had to be undone, a longer run of
+        # the pattern is required, and after three no more jumps are tried
+        if (accelerate and shrinking and c + 2 < cycles and undone < 3
+                and len(seq) >= accel_order + 2 + 3 * undone
+                and _geometric(np.array(seq[-(accel_order + 2):]))):
+            x_star = _rre(np.array(seq[-(accel_order + 2):]))
+            if x_star is not None and np.all(np.isfinite(x_star)):
+                pending = (starts[-1].copy(), residual, pattern)
+                probation = (starts[-1].copy(), [])
+                jumps += 1
+                x_star[2 * n:] = np.maximum(x_star[2 * n:], 0.0)   # separations ≥ 0
+                evo.x = x_star
+                evo.resync()
+                starts[-1] = x_star.copy()
+                seq, pattern, plain_from, res_prev = [x_star.copy()], None, \
+                    len(starts) - 1, np.inf
     slip_tol = max(100 * tol, 1e-9) * max(disp_scale, float(np.max(np.abs(starts[-1]))))
     slipping = np.flatnonzero(totals.slip_length > slip_tol)
     separating = np.flatnonzero(totals.separated)
@@ -255,4 +360,55 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
         steps_per_cycle_taken=steps, refinements_per_cycle=refs,
         dissipation_history=diss_hist, stored_energy_change=d_stored,
         normal_work=totals.normal_work, solver_stats=dict(evo.solver.stats),
-        unresolved_steps=unresolved)
+        unresolved_steps=unresolved, jumps=jumps, jumps_undone=undone)
+
+
+def _geometric(states: np.ndarray, spread: float = 1.1) -> bool:
+    """The changes u_i = x_{i+1} − x_i of the sequence ``states`` ((k+2, M)) shrink by
+    ratios |u_{i+1}|/|u_i| < 1 that agree within the factor ``spread``: the error is then
+    dominated by few slowly decaying directions of the cycle map and the extrapolation
+    applies; before that (a pattern still settling) it could overshoot."""
+    norms = np.linalg.norm(np.diff(states, axis=0), axis=1)
+    if np.any(norms == 0.0):
+        return False
+    ratios = norms[1:] / norms[:-1]
+    return bool(ratios.max() < 1.0 and ratios.max() <= spread * ratios.min())
+
+
+def _rre(states: np.ndarray, max_gain: float = 200.0) -> np.ndarray | None:
+    """Reduced rank extrapolation of a fixed-point sequence.
+
+    Parameters
+    ----------
+    states : (k + 2, M) array
+        Successive iterates x_0 … x_{k+1} of x_{i+1} = P(x_i).
+    max_gain : float
+        The jump from x_{k+1} may be at most this many times the last change (a ratio
+        of the sequence up to 1 − 1/max_gain); larger ones are refused.
+
+    Returns
+    -------
+    (M,) array or None
+        x* = Σ γ_i x_{i+1} with Σ γ_i = 1 minimising |Σ γ_i u_i|, u_i = x_{i+1} − x_i
+        (Sidi, Ford & Smith, SIAM J. Numer. Anal. 23, 1986); components that did not
+        change along the sequence are returned unchanged. None if the problem is
+        degenerate or the jump is implausibly large.
+    """
+    U = np.diff(states, axis=0)                    # (k+1, M)
+    moving = np.flatnonzero(np.any(U != 0.0, axis=0))
+    last = float(np.max(np.abs(U[-1]))) if moving.size else 0.0
+    if last == 0.0:
+        return None
+    Um = U[:, moving] / last
+    # γ_k = 1 − Σ_{i<k} γ_i: min |u_k + Σ_{i<k} γ_i (u_i − u_k)|, a least-squares problem
+    # solved by the SVD (minimum norm where the changes are linearly dependent)
+    W = (Um[:-1] - Um[-1]).T
+    g = np.linalg.lstsq(W, -Um[-1], rcond=1e-12)[0]
+    if not np.all(np.isfinite(g)):
+        return None
+    gamma = np.append(g, 1.0 - g.sum())
+    x = states[-1].copy()
+    x[moving] = gamma @ states[1:, moving]
+    if float(np.max(np.abs(x - states[-1]))) > max_gain * last:
+        return None
+    return x

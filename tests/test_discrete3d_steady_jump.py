@@ -1,0 +1,131 @@
+"""The accelerated cycle loop of ``simulate3d`` (reduced rank extrapolation of the
+start-of-cycle state once the slip pattern repeats, validated by the next cycle) against
+plain cycling run to a much tighter tolerance: the same steady-state class, the same
+dissipation per cycle and per node within the cycling tolerance, the same slipping,
+stuck and separating nodes (the same member of the set of steady states), on random
+coupled systems and on an FE-like chain whose plain cycling creeps slowly."""
+
+import numpy as np
+import pytest
+
+from slipcycle.discrete3d.loads import Load3D
+from slipcycle.discrete3d.model import FrictionalSystem3D
+from slipcycle.discrete3d.steady import _rre, simulate3d
+
+TOL = 1e-7          # cycling tolerance of the accelerated runs
+REF_TOL = 1e-11     # plain cycling, the reference
+
+
+def _random_coupled(seed, n):
+    rng = np.random.default_rng(seed)
+    M = rng.normal(size=(3 * n, 3 * n))
+    K = M @ M.T / (3 * n) + np.eye(3 * n)
+    t = np.arange(2 * n)
+    system = FrictionalSystem3D(K[np.ix_(t, t)], 0.3 * K[2 * n:, :2 * n], K[2 * n:, 2 * n:],
+                                rng.uniform(0.25, 0.4, n), accept_ill_posed=True)
+    # steady pressure, mean shear, and rotating shear large at some nodes only: those slip,
+    # the rest stick with a memory of the history
+    amp = 0.05 + 0.5 * (rng.uniform(size=n) < 0.4)
+    q1 = np.column_stack([amp, 0.7 * amp]).ravel()
+    ph = np.column_stack([np.zeros(n), np.full(n, -np.pi / 2)]).ravel()
+    load = Load3D.harmonic(np.full(n, 2.0), 0.1 * rng.normal(size=2 * n),
+                           0.3 * rng.uniform(size=n), q1, np.zeros(n), ph)
+    return system, load
+
+
+def _fe_like(n):
+    """The benchmark's FE-like chain (benchmarks/bench_discrete3d.py): edges slip, the
+    interior sticks, and plain cycling approaches the periodic state slowly."""
+    i = np.arange(n)
+    d = np.abs(i[:, None] - i[None, :])
+    A1 = 2.0 * np.exp(-d / 2.0) * np.cos(0.7 * d) + np.eye(n)
+    A = np.kron(A1, np.array([[1.0, 0.1], [0.1, 1.0]]))
+    B = np.zeros((n, 2 * n))
+    B[:, 0::2] = 0.3 * np.sign(i[:, None] - i[None, :]) * np.exp(-d / 3.0)
+    x = np.linspace(-1.0, 1.0, n)
+    system = FrictionalSystem3D(A, B, 1.3 * A1, 0.3)
+    amp = 0.1 + 0.4 * np.abs(x) ** 8
+    q1 = np.column_stack([amp, 0.6 * amp]).ravel()
+    ph = np.column_stack([np.zeros(n), np.full(n, -np.pi / 2)]).ravel()
+    load = Load3D.harmonic(np.ones(n), np.column_stack([0.05 * x, np.zeros(n)]).ravel(),
+                           0.2 * np.ones(n), q1, np.zeros(n), ph)
+    return system, load
+
+
+def _assert_same_steady_state(acc, ref, tol=TOL):
+    assert ref.steady_converged
+    assert acc.steady_state == ref.steady_state
+    assert acc.slipping_nodes == ref.slipping_nodes
+    assert acc.permanently_stuck_nodes == ref.permanently_stuck_nodes
+    assert acc.separating_nodes == ref.separating_nodes
+    # the accepted state is within tol of a fixed point; the distance to it is then at
+    # most tol / (1 − ρ) (ρ the contraction of the cycle map): a margin of 100
+    e_scale = ref.force_scale * ref.disp_scale
+    assert abs(acc.dissipation_per_cycle - ref.dissipation_per_cycle) <= 100 * tol * e_scale
+    assert np.max(np.abs(acc.dissipation_per_node - ref.dissipation_per_node)) \
+        <= 100 * tol * e_scale
+    assert np.max(np.abs(acc.cycle_start_states[-1] - ref.cycle_start_states[-1])) \
+        <= 100 * tol * max(ref.disp_scale, np.max(np.abs(ref.cycle_start_states[-1])))
+
+
+def _pair(system, load, cycles_ref, steps=40, step_tol=1e-6, tol=TOL, ref_tol=REF_TOL):
+    kw = dict(steps_per_cycle=steps, step_tol=step_tol, record=False)
+    acc = simulate3d(system, load, cycles=cycles_ref, tol=tol, **kw)
+    ref = simulate3d(system, load, cycles=cycles_ref, tol=ref_tol, accelerate=False, **kw)
+    return acc, ref
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_accelerated_random_coupled_systems_reach_plain_cyclings_steady_state(seed):
+    system, load = _random_coupled(seed, 8)
+    acc, ref = _pair(system, load, 200)
+    _assert_same_steady_state(acc, ref)
+    assert acc.cycles_run <= ref.cycles_run
+
+
+def test_accelerated_fe_like_chain_jumps_and_matches_plain_cycling():
+    # the cycling tolerance stays above the step control's (its refinement decisions
+    # make the discretised cycle map only piecewise smooth at that level)
+    system, load = _fe_like(50)
+    acc, ref = _pair(system, load, 150, steps=40, step_tol=1e-6, tol=1e-6, ref_tol=1e-9)
+    _assert_same_steady_state(acc, ref, tol=1e-6)
+    assert acc.steady_state == "cyclic_slip"
+    assert acc.permanently_stuck_nodes          # a memory the jump had to keep
+    assert acc.jumps >= 1 and acc.jumps_undone == 0
+    # far fewer cycles than plain cycling needs for the same tolerance
+    plain = simulate3d(system, load, cycles=150, tol=1e-6, accelerate=False,
+                       steps_per_cycle=40, step_tol=1e-6, record=False)
+    assert plain.steady_state == "cyclic_slip"
+    assert acc.cycles_run < plain.cycles_run
+
+
+def test_accelerate_false_is_plain_cycling():
+    """Without acceleration no state is replaced: the run equals one whose cycles are
+    chained by hand, each starting where the previous ended."""
+    system, load = _fe_like(20)
+    kw = dict(steps_per_cycle=20, step_tol=1e-5, record=False)
+    res = simulate3d(system, load, cycles=3, tol=1e-14, accelerate=False, **kw)
+    assert res.jumps == 0 and res.cycles_run == 3
+    one = simulate3d(system, load, cycles=1, tol=1e-14, **kw)
+    np.testing.assert_array_equal(res.cycle_start_states[:2], one.cycle_start_states)
+
+
+def test_rre_is_exact_for_a_linear_contraction_and_keeps_unmoved_components():
+    """For x_{i+1} = T x_i + b with the error in k eigen-directions, k + 1 differences
+    give the fixed point exactly; components that never move are left as they are."""
+    rng = np.random.default_rng(3)
+    m, k = 12, 3
+    Q, _ = np.linalg.qr(rng.normal(size=(m - 2, m - 2)))
+    lam = np.array([0.97, 0.9, -0.5] + [0.0] * (m - 5))
+    T = Q @ np.diag(lam) @ Q.T
+    b = rng.normal(size=m - 2)
+    x_fix = np.linalg.solve(np.eye(m - 2) - T, b)
+    e0 = Q[:, :3] @ rng.normal(size=3)
+    xs = [x_fix + e0]
+    for _ in range(k + 1):
+        xs.append(T @ xs[-1] + b)
+    frozen = np.array([0.123, -4.5])                # a stuck node's slip: never moves
+    states = np.array([np.concatenate([frozen, x]) for x in xs])
+    x_star = _rre(states)
+    assert np.array_equal(x_star[:2], frozen)
+    np.testing.assert_allclose(x_star[2:], x_fix, atol=1e-9 * np.max(np.abs(x_fix)))
