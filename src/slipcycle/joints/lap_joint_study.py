@@ -41,6 +41,7 @@ from slipcycle.discrete3d import FrictionalSystem3D, Load3D, LoadCase3D, solve_m
 from slipcycle.discrete3d.case import RUN_DEFAULTS, DiscreteResult3D
 from slipcycle.errors import InputError
 from slipcycle.io.matrices import ReducedStiffness
+from slipcycle.kernels.threads import single_threaded_blas
 from slipcycle.loading import HarmonicLoad
 from slipcycle.result import STEADY_STATES, RunResult, SteadyState
 
@@ -411,18 +412,20 @@ def lap_joint_study(contacts: JointContact | Sequence[JointContact],
     states = np.full((len(contacts), len(protocols)), "not_converged", dtype=object)
     finest: list[DiscreteResult3D] = []
     done = 0
-    for m, contact in enumerate(contacts):
-        last = m == len(contacts) - 1
-        system = joint_system(contact, settings)
-        for j, protocol in enumerate(protocols):
-            res = run_protocol(contact, protocol, settings, fields if last else (), system)
-            diss[m, j] = res.solution.dissipation_per_cycle
-            states[m, j] = res.solution.steady_state
-            if last:
-                finest.append(res)
-            done += 1
-            if progress is not None:
-                progress(done, total)
+    with single_threaded_blas():   # small dense solves: threads only spin (kernels.threads)
+        for m, contact in enumerate(contacts):
+            last = m == len(contacts) - 1
+            system = joint_system(contact, settings)
+            for j, protocol in enumerate(protocols):
+                res = run_protocol(contact, protocol, settings, fields if last else (),
+                                   system)
+                diss[m, j] = res.solution.dissipation_per_cycle
+                states[m, j] = res.solution.steady_state
+                if last:
+                    finest.append(res)
+                done += 1
+                if progress is not None:
+                    progress(done, total)
     mesh = MeshRuns(tuple(spacing), diss, states.astype(str))
     return LapJointResult.from_runs(contacts[-1], tuple(protocols), tuple(finest), mesh,
                                     settings, time.perf_counter() - t0)

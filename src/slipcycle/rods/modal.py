@@ -56,10 +56,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from slipcycle.kernels.threads import single_threaded_blas
 from slipcycle.rods.interfaces import Bed
 from slipcycle.rods.kernels import integrate
 from slipcycle.rods.model import Excitation, TwoRods
-from slipcycle.rods.periodic import newton_periodic, periodic_operator, single_threaded_blas
+from slipcycle.rods.periodic import newton_periodic, periodic_operator
 from slipcycle.rods.welded import normal_force_history
 
 __all__ = ["ModalBasis", "Propagator", "modal_basis", "modal_frf", "step_coefficients",

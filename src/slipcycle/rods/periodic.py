@@ -53,40 +53,12 @@ import numpy as np
 from numba import njit
 from scipy.linalg import lu_factor, lu_solve
 
-try:  # small dense algebra runs fastest on one thread (no BLAS oversubscription)
-    from threadpoolctl import ThreadpoolController
-except ImportError:  # pragma: no cover - optional
-    ThreadpoolController = None
-
 __all__ = ["PeriodicOperator", "periodic_operator", "newton_periodic", "NewtonResult",
-           "single_threaded_blas", "NEWTON_RTOL"]
+           "NEWTON_RTOL"]
 
 #: relative residual max|r|/scale at which the Newton iterate is accepted [1]
 NEWTON_RTOL = 1e-12
 LINE_SEARCH_CUTS = 12
-
-_CONTROLLER: list = []
-
-
-class _NoLimit:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
-
-
-def single_threaded_blas():
-    """Context manager limiting BLAS/LAPACK to one thread (a no-op without threadpoolctl).
-
-    The matrices of one map point are small (≤ 400 × 400): threaded BLAS only adds
-    synchronisation, which on a loaded machine made a 200 × 200 LU 50 times slower.
-    """
-    if ThreadpoolController is None:
-        return _NoLimit()
-    if not _CONTROLLER:
-        _CONTROLLER.append(ThreadpoolController())
-    return _CONTROLLER[0].limit(limits=1, user_api="blas")
 
 
 @dataclass(frozen=True)
