@@ -340,20 +340,26 @@ def _interrupt_deferred():
     An interrupt inside xarray's netCDF writer, between the acquisition of its HDF5 lock
     and its cleanup, leaves the lock held and the cleanup waiting on it for ever; held
     back, it is raised once the file is complete (and the staged write removes it). Only
-    in the main thread of a POSIX process; elsewhere the block runs as it is.
+    in the main thread (where Python handlers run); elsewhere the block runs as it is.
     """
     import signal
     import threading
 
-    if not hasattr(signal, "pthread_sigmask") \
-            or threading.current_thread() is not threading.main_thread():
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    # a Python-level handler, not a signal mask: the signal may be delivered to any thread
+    # (BLAS, Numba and test-runner threads do not block it), but Python handlers always
+    # run in the main thread, between bytecodes
+    caught = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        signal.signal(signal.SIGINT, signal.default_int_handler if previous is None
+                      else previous)
+    if caught:
+        raise KeyboardInterrupt
 
 
 @contextlib.contextmanager
