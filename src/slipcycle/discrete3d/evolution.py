@@ -42,6 +42,30 @@ Energy bookkeeping per step (trapezoidal): D_j += −½(q_j⁰ + q_j¹)·Δv_j a
 W += ½(x⁰ + x¹)·Δr^w; with these the discrete stored energy Π = ½xᵀKx + r^wᵀx changes by
 exactly W − ΣD + Σ ½(p⁰ + p¹)Δw (the last term vanishes except in steps where a node
 opens or closes).
+
+Replay of a recorded subdivision. Every adaptive path records its accepted sub-steps per
+load interval (:attr:`PathTotals3D.plan`: the fractions of the interval, the depth, how
+the step was kept — exact full step, two half steps, two half steps with the
+extrapolation — and the node states at the ends of its steps). With ``plan`` set,
+:meth:`Evolution3D.follow` solves the same steps again without the error estimates and
+without the rejected coarser steps: only the steps that the adaptive method would keep
+(for an extrapolated step also the full step it needs). Where the adaptive decisions on
+the new path are the recorded ones, the result equals the adaptive method's to the
+Newton tolerance; the path map is then one fixed function instead of a piecewise one
+whose refinement decisions may switch from path to path. The Newton tolerance matters
+here: the converged step depends on the iteration's path (predictor, chord matrices
+kept from earlier steps) through the residual left, and with slipping nodes of small
+effective stiffness a residual of 1e-11 × the force scale moved a whole cycle by up to
+4e-6 × the displacement scale (the same adaptive cycle repeated from the same state
+with other kept matrices; FE-like chain of 60 nodes, ``step_tol`` 1e-5), enough to keep
+a ``tol`` of 1e-7 out of reach; with 1e-13 (the default) the repeat agrees within 1e-12.
+Where an end state of a sub-step differs from the recorded one, and with ``check_plan``
+everywhere, the full step is solved too and the error estimate checked; a recorded step
+whose estimate now exceeds the tolerance (or that is no longer exact) is redone
+adaptively and counted in :attr:`PathTotals3D.replay_mismatches` (the recorded
+subdivision no longer fits). Replay cannot see that the adaptive method would now accept
+a coarser step; the caller verifies a result obtained by replay with an adaptive path
+(:func:`~slipcycle.discrete3d.steady.simulate3d`).
 """
 
 from __future__ import annotations
@@ -104,7 +128,8 @@ class StepSolver:
     force_scale : float
         Typical load [N]; the Newton residual tolerance is ``rel_tol`` × it.
     rel_tol : float
-        Relative residual tolerance of the Newton iteration.
+        Relative residual tolerance of the Newton iteration (module docstring, replay:
+        the cycle map is reproducible to about 1e-12 with the default).
     max_iter : int
         Newton iterations before the step is declared failed (the caller halves it).
     """
@@ -113,7 +138,7 @@ class StepSolver:
     chord_rate = 0.25
 
     def __init__(self, system: FrictionalSystem3D, force_scale: float,
-                 rel_tol: float = 1e-11, max_iter: int = 60):
+                 rel_tol: float = 1e-13, max_iter: int = 60):
         self.sys = system
         n = self.n = system.n_nodes
         self.K = np.ascontiguousarray(system.K)
@@ -323,6 +348,11 @@ class PathTotals3D:
         At some step end every node slipped or was separated (memory erased).
     steps, refinements : int
         Load steps taken and intervals halved by the step control.
+    plan : list
+        The accepted sub-steps of each load interval (module docstring, replay); it can
+        be passed as :attr:`Evolution3D.plan` to solve the same subdivision again.
+    replay_mismatches : int
+        Recorded sub-steps that did not fit the path when replayed (redone adaptively).
     samples : dict
         ``x``, ``r`` ((n+1, 3N)) and ``modes`` ((n+1, N)) at the load samples (if recorded).
     """
@@ -338,6 +368,10 @@ class PathTotals3D:
     refinements: int = 0
     unresolved: int = 0
     samples: dict = field(default_factory=dict)
+    #: accepted sub-steps per load interval, a list per interval of
+    #: (fraction start, fraction end, depth, kind, node states at the step ends)
+    plan: list = field(default_factory=list)
+    replay_mismatches: int = 0
 
     @classmethod
     def zeros(cls, n: int) -> PathTotals3D:
@@ -391,6 +425,11 @@ class Evolution3D:
         self._totals: PathTotals3D | None = None
         #: set to a list to record every committed step (x, r, modes, x_before) for checks
         self.step_log: list | None = None
+        #: a recorded subdivision (:attr:`PathTotals3D.plan`) to replay, or None: adaptive
+        self.plan: list | None = None
+        #: while replaying, also solve the full steps and check the error estimates
+        self.check_plan = False
+        self._leaves: list = []
 
     def resync(self) -> None:
         """Recompute r = r^w + K x exactly (removes round-off drift of the updates)."""
@@ -456,12 +495,30 @@ class Evolution3D:
     def _solve(self, x, r, drw, guess=None):
         return self.solver.solve(x, r, drw, guess)
 
+    def _accept(self, x0, r0, full: Step, h1: Step, h2: Step,
+                smooth: bool | None = None) -> tuple[bool, bool]:
+        """(accepted, smooth): the step-doubling test of an interval solved as ``full``
+        and as the half steps ``h1``, ``h2`` from (x0, r0); ``smooth`` given: the test
+        of a step kept with (True) or without (False) the extrapolation."""
+        err = float(np.max(np.abs(full.x - h2.x))) / self.disp_scale
+        d_full = float(np.sum(self._step_dissipation(x0, r0, full)))
+        d_half = float(np.sum(self._step_dissipation(x0, r0, h1))
+                       + np.sum(self._step_dissipation(h1.x, h1.r, h2)))
+        err_d = abs(d_full - d_half) / (self.F * self.disp_scale)
+        if smooth is None:
+            smooth = self._smooth(full, h1, h2)
+        # the estimate is that of the half-step (first-order) result; the extrapolated
+        # result of a smooth step is O(h³), i.e. about est^(3/2) in scaled units
+        tol = self.step_tol ** (2.0 / 3.0) if smooth else self.step_tol
+        return max(err, err_d) <= tol, smooth
+
     def _interval(self, rwa: np.ndarray, rwb: np.ndarray, full: Step | None, depth: int,
-                  guess: tuple | None = None):
+                  guess: tuple | None = None, fa: float = 0.0, fb: float = 1.0):
         x0, r0 = self.x, self.r
         if full is None:
             full = self._solve(x0, r0, rwb - rwa, guess)
         if full is not None and (not self.adaptive or self._exact(full)):
+            self._leaves.append((fa, fb, depth, "E", (full.modes,)))
             self._commit(full)
             return
         mid = 0.5 * (rwa + rwb)
@@ -473,16 +530,10 @@ class Evolution3D:
         g2 = None if full is None else (full.x, full.r)
         h2 = None if h1 is None else self._solve(h1.x, h1.r, rwb - mid, g2)
         if full is not None and h2 is not None:
-            err = float(np.max(np.abs(full.x - h2.x))) / self.disp_scale
-            d_full = float(np.sum(self._step_dissipation(x0, r0, full)))
-            d_half = float(np.sum(self._step_dissipation(x0, r0, h1))
-                           + np.sum(self._step_dissipation(h1.x, h1.r, h2)))
-            err_d = abs(d_full - d_half) / (self.F * self.disp_scale)
-            smooth = self._smooth(full, h1, h2)
-            # the estimate is that of the half-step (first-order) result; the extrapolated
-            # result of a smooth step is O(h³), i.e. about est^(3/2) in scaled units
-            tol = self.step_tol ** (2.0 / 3.0) if smooth else self.step_tol
-            if max(err, err_d) <= tol:
+            ok, smooth = self._accept(x0, r0, full, h1, h2)
+            if ok:
+                self._leaves.append((fa, fb, depth, "X" if smooth else "H",
+                                     (h1.modes, h2.modes)))
                 self._commit(h1)
                 self._commit(self._extrapolate(full, h2) if smooth else h2)
                 return
@@ -495,19 +546,84 @@ class Evolution3D:
                     "value for the current set of slipping and separated nodes")
             if self._totals is not None:
                 self._totals.unresolved += 1
+            self._leaves.append((fa, fb, depth, "U", (h1.modes, h2.modes)))
             self._commit(h1)
             self._commit(h2)
             return
         if self._totals is not None:
             self._totals.refinements += 1
-        self._interval(rwa, mid, h1, depth + 1)
+        fm = 0.5 * (fa + fb)
+        self._interval(rwa, mid, h1, depth + 1, fa=fa, fb=fm)
         # h2 was computed from h1: still valid if the first half was kept as h1; else a
         # predictor for the second half (same end load, so its reactions are consistent)
         if h1 is not None and self.x is h1.x:
-            self._interval(mid, rwb, h2, depth + 1)
+            self._interval(mid, rwb, h2, depth + 1, fa=fm, fb=fb)
         else:
             self._interval(mid, rwb, None, depth + 1,
-                           None if h2 is None else (h2.x, h2.r))
+                           None if h2 is None else (h2.x, h2.r), fa=fm, fb=fb)
+
+    def _replay_step(self, rwa, rwb, kind: str, modes: tuple) -> bool:
+        """Solve one recorded sub-step as the adaptive method kept it and commit it;
+        False (nothing committed) if it does not fit: an end state of a sub-step differs
+        from the recorded one, or (``check_plan``) the error estimate fails."""
+        x0, r0 = self.x, self.r
+        if kind == "E":
+            full = self._solve(x0, r0, rwb - rwa)
+            if (full is None or not self._exact(full)
+                    or not np.array_equal(full.modes, modes[0])):
+                return False
+            self._commit(full)
+            return True
+        full = None
+        if kind == "X":
+            full = self._solve(x0, r0, rwb - rwa)
+            if full is None:
+                return False
+        mid = 0.5 * (rwa + rwb)
+        # the predictors of the half steps are those of the cycles that skip the check
+        # (the full step's only for an extrapolated step): a check does not change them
+        pred = full if kind == "X" else None
+        g1 = None if pred is None else (0.5 * (x0 + pred.x), 0.5 * (r0 + pred.r))
+        h1 = self._solve(x0, r0, mid - rwa, g1)
+        if h1 is None:
+            return False
+        h2 = self._solve(h1.x, h1.r, rwb - mid, None if pred is None else (pred.x, pred.r))
+        if h2 is None:
+            return False
+        # another active set than recorded: the step is kept only if its error estimate
+        # still passes
+        check = self.check_plan or not (np.array_equal(h1.modes, modes[0])
+                                        and np.array_equal(h2.modes, modes[1]))
+        if check and full is None:
+            # the Newton matrices kept for the chord steps are restored after this
+            # extra solve: the converged steps depend on them within the Newton
+            # tolerance, and a check must not perturb the replayed map
+            lus = dict(self.solver._lus)
+            full = self._solve(x0, r0, rwb - rwa)
+            self.solver._lus = lus
+            if full is None:
+                return False
+        if check and not self._accept(x0, r0, full, h1, h2, kind == "X")[0]:
+            return False
+        self._commit(h1)
+        self._commit(self._extrapolate(full, h2) if kind == "X" else h2)
+        return True
+
+    def _replay(self, rwa_k: np.ndarray, rwb_k: np.ndarray, leaves: list) -> None:
+        """Replay the recorded sub-steps of one load interval (module docstring); a
+        sub-step that does not fit is redone adaptively from its start."""
+        d = rwb_k - rwa_k
+        for fa, fb, depth, kind, modes in leaves:
+            rwa = rwa_k + fa * d
+            rwb = rwb_k if fb == 1.0 else rwa_k + fb * d
+            n0 = len(self._leaves)
+            if self._replay_step(rwa, rwb, kind, modes):
+                self._leaves.append((fa, fb, depth, kind, modes))
+            else:
+                del self._leaves[n0:]
+                if self._totals is not None:
+                    self._totals.replay_mismatches += 1
+                self._interval(rwa, rwb, None, depth, fa=fa, fb=fb)
 
     def follow(self, theta: np.ndarray, vals: np.ndarray, record: bool = False
                ) -> PathTotals3D:
@@ -526,9 +642,18 @@ class Evolution3D:
             rs = [self.r.copy()]
             ms = [self.modes.copy()]
         self.r_w = np.array(vals[0], float)
+        plan = self.plan if self.adaptive else None
+        if plan is not None and len(plan) != len(vals) - 1:
+            raise ValueError("the recorded subdivision has "
+                             f"{len(plan)} load intervals, the path {len(vals) - 1}")
         for k in range(len(vals) - 1):
-            if self.adaptive:
+            self._leaves = []
+            if plan is not None:
+                self._replay(vals[k], vals[k + 1], plan[k])
+                t.plan.append(self._leaves)
+            elif self.adaptive:
                 self._interval(vals[k], vals[k + 1], None, 0)
+                t.plan.append(self._leaves)
             else:
                 s = np.linspace(0.0, 1.0, self.substeps + 1)
                 for a, b in zip(s[:-1], s[1:], strict=True):

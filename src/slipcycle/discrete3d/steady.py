@@ -37,6 +37,28 @@ piecewise smooth: its refinement decisions change the state by up to about ``ste
 × the displacement scale, and below that level plain cycling can settle on a small
 periodic orbit (seen with period 4, of amplitude 0.2–0.4 ``step_tol``) instead of a
 fixed point, and a ``tol`` well below ``step_tol`` may not be reached.
+
+Frozen subdivision (``replay``). To make the cycle map one fixed function, once the
+pattern repeats (the condition of the acceleration: the same slipping / separated / stuck
+nodes in two successive cycles) the subdivision of the load intervals that the step
+control chose in the last cycle is frozen and replayed in the following cycles
+(:class:`~slipcycle.discrete3d.evolution.Evolution3D`, ``plan``): the same sub-steps,
+kept as the adaptive method kept them, without the rejected coarser steps and the error
+estimates. The replayed map is smooth where the adaptive one has jumps, so plain cycling
+and the extrapolation converge to its fixed point; each cycle is cheaper. Every
+``replay_check``-th replayed cycle the error estimates are computed as well, and a
+sub-step whose end states differ from the recorded ones has its estimate checked too; one
+whose estimate fails is redone adaptively, and the subdivision that cycle ended with is
+frozen instead. The replayed map equals the adaptive one only where the step control would take
+the same decisions, so a fixed point of the replayed map is accepted only after one
+adaptive cycle from it reproduces its start within ``tol``; otherwise cycling continues
+adaptively (and the subdivision of that cycle may be frozen in turn, at most
+``replay_max`` times). The result is therefore a steady state of the adaptive method
+within ``tol``, as without replay. Replay is off by default: measured on the FE-like
+benchmark chain (1000 and 2000 nodes, ``step_tol`` 1e-4, ``tol`` 1e-6) it removes about
+a third of the step solves but the run still does not reach ``tol`` in 50 cycles, and
+with the extrapolation near a shakedown it can time a jump so that dying slips stop
+elsewhere (another member of the set of steady states).
 """
 
 from __future__ import annotations
@@ -118,6 +140,11 @@ class SteadyResult3D:
     #: extrapolation jumps of the start-of-cycle state (accepted, undone)
     jumps: int = 0
     jumps_undone: int = 0
+    #: cycles run on a frozen subdivision, subdivisions frozen, and replayed sub-steps
+    #: that did not fit (redone adaptively)
+    replayed_cycles: int = 0
+    replay_freezes: int = 0
+    replay_mismatches: int = 0
 
     @property
     def dissipation_per_cycle(self) -> float:
@@ -176,7 +203,8 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,
                step_tol: float = 1e-7, record: bool = True, adaptive: bool = True,
                substeps: int = 1, extrapolate: bool = True, accelerate: bool = True,
-               accel_order: int = 3) -> SteadyResult3D:
+               accel_order: int = 3, replay: bool = False, replay_check: int = 5,
+               replay_max: int = 20) -> SteadyResult3D:
     """Run load cycles to the steady state.
 
     Parameters
@@ -210,6 +238,18 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     accel_order : int
         Number k of differences (beyond one) the extrapolation combines; it is applied
         after k + 1 cycles with the same pattern.
+    replay : bool
+        With ``adaptive``: freeze the step control's subdivision once the pattern
+        repeats and replay it, verifying the result with an adaptive cycle (module
+        docstring); False (default): every cycle adaptive. Off by default: with
+        ``accelerate`` near a shakedown (the slip of some nodes dying out) the slightly
+        different sequence of the replayed map can time the extrapolation so that those
+        nodes stop elsewhere, another member of the set of steady states than plain
+        cycling reaches.
+    replay_check : int
+        Every this many replayed cycles the error estimates are checked as well.
+    replay_max : int
+        Largest number of times a subdivision is frozen.
 
     Returns
     -------
@@ -246,10 +286,29 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     plain_from = 0          # starts[plain_from:] are successive plain cycles
     res_prev = np.inf
     probation = None        # (state before the last jump, residuals since it)
+    # frozen subdivision: ``replaying`` the cycles run on evo.plan since it was frozen,
+    # ``verify`` the next cycle is the adaptive check of a replayed fixed point
+    replay = replay and adaptive
+    replaying, verify, freezes, replayed, mismatches = 0, False, 0, 0, 0
+
+    def switch_map():
+        # the cycle map changes (frozen ↔ adaptive): the extrapolation's sequence and the
+        # ratcheting test restart with cycles of the new map
+        nonlocal seq, pattern, plain_from, res_prev
+        seq, pattern, plain_from, res_prev = [evo.x.copy()], None, len(starts) - 1, np.inf
+
     for c in range(cycles):
+        was_replay, was_verify = evo.plan is not None, verify
+        verify = False
+        if was_replay:
+            evo.check_plan = replaying % max(replay_check, 1) == replay_check - 1
         totals = evo.follow(theta, vals, record=record)
         evo.resync()
         unresolved += totals.unresolved
+        if was_replay:
+            replaying += 1
+            replayed += 1
+            mismatches += totals.replay_mismatches
         starts.append(evo.x.copy())
         diss_hist.append(float(totals.dissipation.sum()))
         steps.append(totals.steps)
@@ -294,12 +353,33 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                 seq, pattern, plain_from, res_prev = [evo.x.copy()], None, len(starts) - 1, \
                     np.inf
                 continue
+        if was_replay and totals.replay_mismatches:
+            # the frozen subdivision no longer fits the path: freeze the subdivision this
+            # cycle ended with (the misfitting steps redone adaptively), or return to
+            # adaptive cycles once ``replay_max`` subdivisions have been frozen
+            evo.plan, replaying = (totals.plan if freezes < replay_max else None), 0
+            freezes += evo.plan is not None
+            switch_map()
+            continue
         if c + 1 < min_cycles:
             res_prev = residual
             continue
         if residual <= tol:
-            state = "steady"
-            break
+            if not was_replay:
+                state = "steady"
+                break
+            # a fixed point of the replayed map: accepted only if an adaptive cycle from
+            # it reproduces it within tol
+            evo.plan, replaying, verify = None, 0, True
+            switch_map()
+            continue
+        if was_verify and freezes < replay_max and pending is None:
+            # the adaptive cycle from the replayed fixed point took other decisions:
+            # freeze its subdivision and replay that one
+            evo.plan, replaying = totals.plan, 0
+            freezes += 1
+            switch_map()
+            continue
         if len(starts) - plain_from >= 3:
             d0 = starts[-2] - starts[-3]
             rres = float(np.max(np.abs(d1 - d0))) / xscale
@@ -314,6 +394,13 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
             seq, pattern = [starts[-2], starts[-1]], pat
         else:
             seq.append(starts[-1])
+            if (replay and evo.plan is None and freezes < replay_max and pending is None
+                    and not was_verify):
+                # the pattern repeats: freeze this cycle's subdivision (the replayed map
+                # equals the adaptive one at the states so far, which the extrapolation
+                # keeps using)
+                evo.plan, replaying = totals.plan, 0
+                freezes += 1
         shrinking = residual < res_prev
         res_prev = residual
         # the extrapolation is tried in the geometric regime only (the last changes
@@ -360,7 +447,8 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
         steps_per_cycle_taken=steps, refinements_per_cycle=refs,
         dissipation_history=diss_hist, stored_energy_change=d_stored,
         normal_work=totals.normal_work, solver_stats=dict(evo.solver.stats),
-        unresolved_steps=unresolved, jumps=jumps, jumps_undone=undone)
+        unresolved_steps=unresolved, jumps=jumps, jumps_undone=undone,
+        replayed_cycles=replayed, replay_freezes=freezes, replay_mismatches=mismatches)
 
 
 def _geometric(states: np.ndarray, spread: float = 1.1) -> bool:
