@@ -72,6 +72,7 @@ from slipcycle.discrete3d.evolution import Evolution3D
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
 from slipcycle.errors import InadmissibleInitialState
+from slipcycle.kernels.threads import single_threaded
 from slipcycle.loading.nodal import force_scale
 
 __all__ = ["SteadyResult3D", "simulate3d", "initial_state_3d", "InadmissibleInitialState3D",
@@ -198,6 +199,7 @@ def initial_state_3d(system: FrictionalSystem3D, r_w: np.ndarray, v0: np.ndarray
     return x
 
 
+@single_threaded   # small dense solves of the active nodes (kernels.threads)
 def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                steps_per_cycle: int = 100, initial_slip: np.ndarray | None = None,
                protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,

@@ -10,9 +10,11 @@ solver ran 50 times slower threaded.
 
 from __future__ import annotations
 
+import functools
+
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["single_threaded_blas"]
+__all__ = ["single_threaded_blas", "single_threaded"]
 
 _CONTROLLER: list = []
 
@@ -22,3 +24,12 @@ def single_threaded_blas():
     if not _CONTROLLER:
         _CONTROLLER.append(ThreadpoolController())
     return _CONTROLLER[0].limit(limits=1, user_api="blas")
+
+
+def single_threaded(func):
+    """Decorator: ``func`` runs with one BLAS thread (:func:`single_threaded_blas`)."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with single_threaded_blas():
+            return func(*args, **kwargs)
+    return wrapper
