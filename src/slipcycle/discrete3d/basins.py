@@ -23,7 +23,7 @@ from slipcycle.discrete3d.steady import (
     simulate3d,
 )
 
-__all__ = ["Basins3D", "random_starts", "basins3d"]
+__all__ = ["Basins3D", "random_starts", "basins3d", "distinct_values"]
 
 
 @dataclass(frozen=True)
@@ -51,13 +51,19 @@ class Basins3D:
 
     def attractors(self, rtol: float = 1e-6) -> list[float]:
         """Distinct steady dissipations (within ``rtol`` of the largest) [J]."""
-        d = np.sort(self.dissipation_per_cycle)
-        scale = max(float(np.max(np.abs(d), initial=0.0)), 1e-300)
-        out: list[float] = []
-        for x in d:
-            if not out or abs(x - out[-1]) > rtol * scale:
-                out.append(float(x))
-        return out
+        return distinct_values(self.dissipation_per_cycle, rtol)
+
+
+def distinct_values(values, rtol: float = 1e-6) -> list[float]:
+    """The distinct values of ``values``, sorted, two being one when they differ by at
+    most ``rtol`` times the largest magnitude (the attractors of a basin study)."""
+    d = np.sort(np.asarray(values, float))
+    scale = max(float(np.max(np.abs(d), initial=0.0)), 1e-300)
+    out: list[float] = []
+    for x in d:
+        if not out or abs(x - out[-1]) > rtol * scale:
+            out.append(float(x))
+    return out
 
 
 def random_starts(system: FrictionalSystem3D, load: Load3D, count: int, scale: float, *,

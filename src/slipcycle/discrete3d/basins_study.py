@@ -26,7 +26,7 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
-from slipcycle.discrete3d.basins import random_starts
+from slipcycle.discrete3d.basins import distinct_values, random_starts
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
 from slipcycle.discrete3d.steady import (
@@ -340,13 +340,7 @@ class Basins3DResult(StudyResult):
         """Distinct steady dissipations per cycle (within ``rtol`` of the largest) over the
         starts that converged [J]."""
         ok = self.steady_state <= _code("ratcheting")
-        d = np.sort(np.asarray(self.data["dissipation_per_cycle"], float)[ok])
-        scale = max(float(np.max(np.abs(d), initial=0.0)), 1e-300)
-        out: list[float] = []
-        for x in d:
-            if not out or abs(x - out[-1]) > rtol * scale:
-                out.append(float(x))
-        return out
+        return distinct_values(np.asarray(self.data["dissipation_per_cycle"], float)[ok], rtol)
 
     def headline(self) -> list[tuple]:
         """Mode, λ, starts, class counts, distinct steady dissipations."""
