@@ -112,3 +112,25 @@ def case_text(name: str, **tables) -> str:
             previous = key
         out += [line for _, line in keyed]
     return "\n".join(out) + "\n"
+
+
+def slid_block(elements: int):
+    """The steel block of fe_block_nu03.toml reduced with ``elements`` quadratic elements
+    across the contact (2·elements + 1 nodes), assembled slide-first (pressed 0.2 µm,
+    pushed 3 µm along +t, pressed to 2 µm): (system, load, protocol)."""
+    import numpy as np
+
+    from slipcycle.discrete import DiscreteLoad, FrictionalSystem
+    from slipcycle.fe.builders import block_on_rigid
+    from slipcycle.fe.loads import combined_loads
+    from slipcycle.fe.reduction import reduce_problem
+
+    r = reduce_problem(block_on_rigid(width=0.04, height=0.02, E=210e9, nu=0.3,
+                                      elements=elements, thickness=0.01))
+    load = DiscreteLoad(*combined_loads(r, {"normal": 2e-6},
+                                        {"normal": 0.5e-6, "tangential": 1.5e-6},
+                                        {"tangential": np.pi / 2}))
+    system = FrictionalSystem(r.A, r.B, r.C, 0.5, accept_ill_posed=True)
+    protocol = np.array([np.concatenate(r.combine(normal=a, tangential=t))
+                         for a, t in ((0.2e-6, 0.0), (0.2e-6, 3e-6), (2e-6, 3e-6))])
+    return system, load, protocol
