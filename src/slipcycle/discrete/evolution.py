@@ -19,9 +19,11 @@ only, not on the state, so a perturbation δx of the state passes every load sam
 unchanged and is changed only at events: an event of the function g(x, θ) = aᵀx + b(θ)
 (rate ġ before it) moves by δt = −aᵀδx / ġ, so that afterwards δx ← (I − u aᵀ) δx with
 u = (ẋ_before − ẋ_after) / ġ. With ``jacobian_log`` set to a list the evolution records
-(event kind, node, u) for every event; :mod:`~slipcycle.discrete.periodic` composes them
-into the cycle map's Jacobian. ``signature`` (a hash) records the sequence of modes and
-events, so that two cycles with the same sequence are known to share one affine map.
+(event kind, node, u, ġ, θ and its load segment) for every event;
+:mod:`~slipcycle.discrete.periodic` composes them into the cycle map's Jacobian and, with
+δt, follows plain cycling on that piece of the map. ``signature`` (a hash) records the
+sequence of modes and events, so that two cycles with the same sequence are known to
+share one affine map.
 """
 
 from __future__ import annotations
@@ -189,12 +191,77 @@ class Evolution:
         #: set to a list to record the rank-one factors (kind, node, idx, u[idx]) of the
         #: cycle map's Jacobian, one per event (module docstring)
         self.jacobian_log: list | None = None
+        #: set to a list to record, for every interval between two events of
+        #: ``jacobian_log``, the smallest value at its load samples of the inequalities each
+        #: node's mode must keep (4, N): f p + q ≥ 0 and f p − q ≥ 0 while stuck, p ≥ 0
+        #: while slipping, w ≥ 0 while open, +inf where one does not apply (:meth:`follow`
+        #: adds the last interval; :func:`~slipcycle.discrete.periodic.piece_constraints`)
+        self.margin_log: list | None = None
+        #: with ``margin_log``: every node's maximal intervals of one mode that begin or
+        #: end at an event, as (node, first event, start θ, last event, end θ) with event
+        #: indices into ``jacobian_log`` (−1: a load sample or the end of the path, which
+        #: do not move) — a perturbed start moves the events, and an interval whose length
+        #: would go negative means that the sequence of modes changes
+        self.episode_log: list = []
+        #: with ``margin_log``: at every event, the inequalities of the nodes that keep
+        #: their mode there and their rates before it, ((4, N), (4, N))
+        self.event_margin_log: list = []
+        self._lowest = None
+        self._clock = 0.0
         #: set to ``hashlib.blake2b()`` to hash the sequence of modes and events
         self.signature = None
 
     def resync(self) -> None:
         """Recompute the reactions r = r^w + K x exactly (removes round-off drift)."""
         self.r = self.r_w + self.K @ self.x
+
+    def _record_margins(self, modes: np.ndarray, after_event: bool, theta: float) -> None:
+        """Add the start of a piece with ``modes`` to the records of ``margin_log``.
+
+        At a load sample (which a perturbed start does not move) the values go into the
+        interval's minima. After an event they were recorded at the event with the rates
+        before it (``event_margin_log``), since a perturbed start moves the event; the
+        nodes whose mode changes there sit on an inequality of both modes at that instant
+        (f p ± q = 0 when a node starts or stops slipping, p = 0 or w = 0 when it opens or
+        closes) and are left out: that the interval of each mode keeps its length is what
+        ``episode_log`` checks."""
+        changed = modes != self.modes
+        if changed.any():
+            self._close_episodes(np.flatnonzero(changed),
+                                 len(self.jacobian_log) if after_event else -1, theta)
+        if not after_event:
+            np.minimum(self._lowest, self._margins(modes, self.x, self.r), out=self._lowest)
+            return
+        value, rate = self._at_event
+        value[:, changed] = np.inf
+        self.event_margin_log.append((value, rate))
+        self.margin_log.append(self._lowest)
+        self._lowest = np.full((4, self.n), np.inf)
+
+    def _close_episodes(self, nodes: np.ndarray, event: int, theta: float) -> None:
+        """End the current mode interval of ``nodes`` at ``theta`` (by ``event``, or −1)."""
+        s_ev, s_th = self._episode_event, self._episode_theta
+        for j in nodes[(s_ev[nodes] >= 0) | (event >= 0)]:
+            self.episode_log.append((int(j), int(s_ev[j]), float(s_th[j]), event, theta))
+        s_ev[nodes] = event
+        s_th[nodes] = theta
+
+    def _margins(self, m: np.ndarray, x: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """The inequalities the modes ``m`` must keep, per node (4, N): f p + q and
+        f p − q while stuck, p while slipping, w while open, +inf where they do not apply;
+        of the state (x, r), or their rates from the rates (ẋ, ṙ)."""
+        n = self.n
+        q, p = r[:n], r[n:]
+        fp = self.f * p
+        out = np.full((4, n), np.inf)
+        stick = m == STICK
+        out[0, stick] = fp[stick] + q[stick]
+        out[1, stick] = fp[stick] - q[stick]
+        slip = (m == SLIP_POS) | (m == SLIP_NEG)
+        out[2, slip] = p[slip]
+        sep = m == SEPARATED
+        out[3, sep] = x[n:][sep]
+        return out
 
     def _next_event(self, modes, x, r, xd, rd, remaining):
         n = self.n
@@ -219,13 +286,18 @@ class Evolution:
         pending = None
         while True:
             modes, xd, rd = self.solver.solve(self.x, self.r, rw, guess)
+            if self._lowest is not None:
+                self._record_margins(modes, pending is not None, self._clock + t)
             self.modes = modes
             if pending is not None:
-                # rank-one factor I − u aᵀ of the event just passed (module docstring)
-                kind, j, gdot, xd_b = pending
+                # rank-one factor I − u aᵀ of the event just passed (module docstring),
+                # ġ, which says how far the event moves, and where it happened: θ and
+                # the load segment [θ_lo, θ_hi] it must not leave
+                kind, j, gdot, xd_b, t_event = pending
                 diff = xd_b - xd
                 idx = np.flatnonzero(diff)
-                jlog.append((kind, j, idx, diff[idx] / gdot))
+                jlog.append((kind, j, idx, diff[idx] / gdot, gdot, self._clock + t_event,
+                             self._clock, self._clock + dtheta))
                 pending = None
             if sig is not None:
                 sig.update(modes.tobytes())
@@ -242,12 +314,19 @@ class Evolution:
                 t += dt
             if self.event_log is not None:
                 self.event_log.append((self.x.copy(), self.r.copy(), modes.copy()))
+            if self._lowest is not None:
+                if event is None:
+                    np.minimum(self._lowest, self._margins(modes, self.x, self.r),
+                               out=self._lowest)
+                else:                       # the interval ends at this event
+                    self._at_event = (self._margins(modes, self.x, self.r),
+                                      self._margins(modes, xd, rd))
             if event is None:
                 break
             # warm start: the node that caused the event most likely changes state so
             kind, j = event
             if jlog is not None:
-                pending = (kind, j, self._event_rate, xd)
+                pending = (kind, j, self._event_rate, xd, t)
             if sig is not None:
                 sig.update(bytes((kind,)) + int(j).to_bytes(4, "little"))
             guess = modes.copy()
@@ -262,6 +341,7 @@ class Evolution:
             sig.update(b"|")
         self.events += count
         totals.events += count
+        self._clock += dtheta
         self.r_w = np.asarray(r_w_end, float).copy()
 
     def follow(self, theta: np.ndarray, loads: np.ndarray, totals: PathTotals | None = None,
@@ -284,6 +364,13 @@ class Evolution:
         PathTotals
         """
         totals = totals or PathTotals.zeros(self.n)
+        if self.margin_log is not None:
+            self._lowest = np.full((4, self.n), np.inf)
+            self.episode_log = []
+            self.event_margin_log = []
+            self._episode_event = np.full(self.n, -1)
+            self._episode_theta = np.zeros(self.n)
+            self._clock = 0.0
         if record:
             xs = np.empty((len(theta), 2 * self.n))
             rs = np.empty((len(theta), 2 * self.n))
@@ -293,6 +380,10 @@ class Evolution:
             self.advance(loads[k + 1], theta[k + 1] - theta[k], totals)
             if record:
                 xs[k + 1], rs[k + 1], ms[k + 1] = self.x, self.r, self.modes
+        if self._lowest is not None:
+            self.margin_log.append(self._lowest)
+            self._lowest = None
+            self._close_episodes(np.arange(self.n), -1, self._clock)
         if record:
             totals.samples = {"x": xs, "r": rs, "modes": ms}
         return totals

@@ -1,4 +1,4 @@
-"""The periodic state of the cycle map, found without cycling to it.
+"""Plain cycling on one piece of the cycle map, followed without running its cycles.
 
 Let Φ map the state x = [v, w] at the start of a load cycle to the state one cycle later.
 Between events every rate is constant and independent of the state (it depends on the
@@ -12,39 +12,34 @@ where a_e is the gradient of the event function g_e (f p ± q, p or w of the nod
 rate before the event (:mod:`~slipcycle.discrete.evolution`). The cycle map of a frictional
 system is thus piecewise affine (Andersson, Barber & Ahn 2013 study its attractors); plain
 cycling x_{c+1} = Φ(x_c) converges geometrically, at the rate of the spectral radius of M,
-which for coupled FE-reduced models is often close to 1.
+which for coupled FE-reduced models is often close to 1. Every u_e vanishes outside the
+coordinates S of the nodes that slip or separate in the cycle; the other nodes keep the
+slip their history gave them (Barber 2012, §3: the permanently stuck nodes make the steady
+state a set, not a point).
 
-Memory. Every u_e vanishes outside the coordinates S of the nodes that slip or separate
-in the cycle; the other nodes keep the slip their history gave them (Barber 2012, §3: the
-permanently stuck nodes make the steady state a set, not a point). With r = Φ(x) − x, plain
-cycling from x converges to
+On the piece, the increments of successive cycles are r, M r, M² r, … (r = Φ(x) − x), so
+cycle k starts from x + d_k, d_k = r + M r + … + M^{k−1} r: one product by M per cycle,
+applied factor by factor (O(E |S|), E events; Golub & Van Loan, *Matrix Computations*,
+4th ed., §2.1.5), instead of a cycle of the event-driven solver. The product also gives
+each factor's coefficient c_e = a_eᵀ M_{e−1} d_k, and with it how far event e moves,
+δt_e = −c_e / ġ_e. :func:`follow_piece` goes on while the cycle from x + d_k stays on the
+piece:
 
-    x_∞ = x + Σ_k M^k r = x + (I − M)^D r,
+- every event stays in its load segment: an event that passes a load sample changes the
+  modes that the next segment's rates are solved with, and a node that slipped on
+  through that sample may stop there instead (a change of the map that does not vanish
+  with the event's move);
+- every node's interval of one mode keeps a non-negative length (:class:`ModeIntervals`):
+  a slip that shrinks to nothing stops for good after finitely many cycles;
+- every inequality of the modes holds on every interval (:class:`PieceConstraints`): a
+  stuck node that touches its friction limit on the way slips and changes the memory the
+  history selects, however firmly the piece's periodic state would hold it.
 
-the Drazin inverse (Campbell & Meyer, *Generalized Inverses of Linear Transformations*,
-1979, §7): it changes only S, keeps the components of the neutral directions of M (e.g. the
-reactions p = q = 0 of a node that stays open, or a stuck node's slip) and contracts the
-rest. For a consistent system of index one, GMRES started from zero stays in the Krylov
-space of (I − M, r) ⊂ range(I − M) and returns exactly this solution (Brown & Walker,
-"GMRES on (nearly) singular systems", SIAM J. Matrix Anal. Appl. 18 (1997) 37–51); the
-Ritz values of the Arnoldi process estimate the spectrum of M on that space, and the step
-is refused unless all of them lie inside the unit circle (plain cycling would then not
-converge to it). :func:`periodic_step` does this with the rank-one factors applied in
-sequence (O(E |S|) per product, E events per cycle; Golub & Van Loan, *Matrix
-Computations*, 4th ed., §6.1 GMRES and §2.1.5 rank-one updates). The small least-squares
-problem of GMRES is solved by the truncated SVD of Arnoldi's Hessenberg matrix (Golub &
-Van Loan §5.5.8): a direction in which I − M is below :data:`NEUTRAL` of its largest
-singular value is neutral (a stuck node's memory, a slip that round-off lets into the
-Krylov space), and the minimum-norm solution leaves it alone as the Drazin inverse does,
-instead of dividing r's round-off component along it by ~0 (on the 401-node FE block
-this threw the step 10⁷ increments off and every step was refused).
-
-The step is exact only while the sequence of events stays the same, and the cycle map
-changes piece as event times cross load samples, so it is used as Newton's method on the
-piecewise-affine map: :func:`~slipcycle.discrete.steady.simulate` takes a step when the
-same nodes slipped in the last two cycles, refuses one whose cycles would reverse a one-way
-slip (:func:`stays_one_way`: plain cycling would leave the piece and freeze that node
-elsewhere), and checks every step by one more exact cycle.
+Where the increments vanish first, x + d_k is plain cycling's limit with the memory the
+history gives it; where the piece is left after k cycles, x + d_k is plain cycling's state
+after k cycles. Both are exact, up to round-off and to the displacement below which
+nothing counts (the cycling tolerance): :func:`~slipcycle.discrete.steady.simulate` skips
+to them and checks each by one more exact cycle.
 """
 
 from __future__ import annotations
@@ -54,11 +49,11 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-#: singular values of I − M below this fraction of the largest count as neutral directions
-NEUTRAL = 1e-8
+#: how far an event may move past the end of its load segment [rad] (round-off)
+SEGMENT_TOL = 1e-12
 
-__all__ = ["CycleJacobian", "cycle_jacobian", "periodic_step", "PeriodicStep",
-           "stays_one_way"]
+__all__ = ["CycleJacobian", "cycle_jacobian", "PieceConstraints", "piece_constraints",
+           "ModeIntervals", "PieceRun", "follow_piece"]
 
 
 @dataclass(frozen=True)
@@ -78,24 +73,26 @@ class CycleJacobian:
     S: np.ndarray
     U: np.ndarray
     A: np.ndarray
+    #: (E,) rate ġ_e of each event's function before it [N/rad or m/rad]
+    rate: np.ndarray = None
+    #: (E,) θ of each event and the ends of its load segment [rad]
+    time: np.ndarray = None
+    lo: np.ndarray = None
+    hi: np.ndarray = None
+
+    def event_shift(self, c: np.ndarray) -> np.ndarray:
+        """How far each event moves for a start moved by d, from the coefficients
+        c_e = a_eᵀ M_{e−1} d of the factors: δt_e = −c_e / ġ_e [rad]."""
+        return -c / self.rate
 
     def apply(self, v: np.ndarray) -> np.ndarray:
         """(I − M) v for v (m,)."""
         return v - _apply_map(self.U, self.A, v.copy())
 
 
-@njit(cache=True)
 def _apply_map(U, A, v):
     """M v = (I − u_E a_Eᵀ) ⋯ (I − u_1 a_1ᵀ) v, in place; O(E m)."""
-    E, m = U.shape
-    for e in range(E):
-        s = 0.0
-        for i in range(m):
-            s += A[e, i] * v[i]
-        if s != 0.0:
-            for i in range(m):
-                v[i] -= U[e, i] * s
-    return v
+    return _apply_map_coefficients(U, A, v, np.empty(U.shape[0]))
 
 
 def cycle_jacobian(log: list, K: np.ndarray, friction: np.ndarray,
@@ -104,9 +101,10 @@ def cycle_jacobian(log: list, K: np.ndarray, friction: np.ndarray,
 
     Parameters
     ----------
-    log : list of (kind, node, idx, u)
+    log : list of (kind, node, idx, u, rate, θ, θ_lo, θ_hi)
         ``Evolution.jacobian_log`` of one cycle: the event kind (0: f p + q = 0 reached,
-        1: f p − q = 0, 2: p = 0, 3: w = 0), its node, and u_e at the indices ``idx``.
+        1: f p − q = 0, 2: p = 0, 3: w = 0), its node, u_e at the indices ``idx``, the
+        rate ġ_e of its event function before it, its θ and its load segment.
     K : (2N, 2N) array
         Reduced stiffness [N/m].
     friction : (N,) array
@@ -118,9 +116,10 @@ def cycle_jacobian(log: list, K: np.ndarray, friction: np.ndarray,
     CycleJacobian or None
     """
     n = K.shape[0] // 2
-    log = [e for e in log if e[2].size]
-    if not log:
+    if not log or not any(e[2].size for e in log):
         return CycleJacobian(np.zeros(0, int), np.zeros((0, 0)), np.zeros((0, 0)))
+    # every event keeps its factor (the identity when it changes no rate), so that the
+    # factors and the events of the log share their indices
     S = np.unique(np.concatenate([e[2] for e in log]))
     E, m = len(log), S.size
     if E * m > max_entries:
@@ -128,8 +127,12 @@ def cycle_jacobian(log: list, K: np.ndarray, friction: np.ndarray,
     kinds = np.array([e[0] for e in log])
     nodes = np.array([e[1] for e in log])
     U = np.zeros((E, m))
-    for k, (_, _, idx, u) in enumerate(log):
-        U[k, np.searchsorted(S, idx)] = u
+    for k, e in enumerate(log):
+        U[k, np.searchsorted(S, e[2])] = e[3]
+    timing = {}
+    if all(len(e) >= 8 for e in log):
+        timing = {name: np.array([e[i] for e in log], float)
+                  for i, name in ((4, "rate"), (5, "time"), (6, "lo"), (7, "hi"))}
     # gradients of g = f p + q, f p − q, p (rows of K) and w (a unit vector)
     f = np.asarray(friction, float)[nodes]
     Kq = K[np.ix_(nodes, S)]
@@ -142,163 +145,374 @@ def cycle_jacobian(log: list, K: np.ndarray, friction: np.ndarray,
         pos = np.searchsorted(S, n + nodes[gap])
         hit = (pos < m) & (S[np.minimum(pos, m - 1)] == n + nodes[gap])
         A[gap[hit], pos[hit]] = 1.0
-    return CycleJacobian(S, np.ascontiguousarray(U), np.ascontiguousarray(A))
+    return CycleJacobian(S, np.ascontiguousarray(U), np.ascontiguousarray(A), **timing)
 
 
 @dataclass(frozen=True)
-class PeriodicStep:
-    """Outcome of :func:`periodic_step`.
+class PieceConstraints:
+    """The inequalities that keep a cycle on the piece of the cycle map it was recorded on.
+
+    Within each interval between two events every node keeps its mode, and so its
+    inequalities: f p ± q ≥ 0 while stuck, p ≥ 0 while slipping, w ≥ 0 while open. On the
+    piece, the state at an instant of the cycle started from x + d is the recorded one
+    plus M_s d, where M_s is the product of the first s factors of :class:`CycleJacobian`
+    (the perturbation changes only at events), so each inequality reads
+    g⁰(s) + a_iᵀ M_s d ≥ 0 at the load samples of every interval s, with g⁰(s) its
+    smallest recorded value there; at an event, which moves by δt_e, it reads
+    g_i(t_e) + ġ_i δt_e + a_iᵀ M_e d ≥ 0. Between those instants each inequality is
+    linear in time, so these are all its minima. The nodes that change mode at an event
+    are left out at that instant (``Evolution.margin_log``): they sit on an inequality
+    there by definition, and the event moving is what :class:`ModeIntervals` checks.
 
     Attributes
     ----------
-    delta : (2N,) array or None
-        x_∞ − x, None when refused.
-    reason : str
-        Why it was refused ("" when taken).
-    spectral_radius : float
-        Largest |eigenvalue| of M estimated on the Krylov space (Ritz values).
-    iterations : int
-        Arnoldi steps.
+    lowest : (E+1, h) array
+        g⁰ of the h inequalities at the load samples of the E+1 intervals between the
+        factors (+inf where an inequality does not apply) [N or m].
+    at_event, event_rate : (E, h) arrays
+        Their values at each event (+inf for the nodes that change mode there) and their
+        rates ġ_i before it: at the moved event, g_i = g_i(t_e) + ġ_i δt_e + a_iᵀ M_e d
+        [N or m, per rad].
+    G : (h, m) array
+        Their gradients a_i on the moving coordinates S.
+    GU : (h, E) array
+        a_iᵀ u_e: change of each inequality per unit coefficient of factor e.
+    tol : (h,) array
+        How far below zero an inequality may go [N or m]: round-off, or the force that
+        slipping by the allowed displacement would relieve (``allow`` ‖a_i‖∞).
     """
 
-    delta: np.ndarray | None
-    reason: str
-    spectral_radius: float
-    iterations: int
+    lowest: np.ndarray
+    at_event: np.ndarray
+    event_rate: np.ndarray
+    G: np.ndarray
+    GU: np.ndarray
+    tol: np.ndarray
+
+    def change(self, d: np.ndarray, c: np.ndarray,
+               rows: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """(E+1, h_rows) change of the inequalities ``rows`` on each interval for a start
+        moved by d (m,) whose factor coefficients are c (E,):
+        a_iᵀ M_s d = a_iᵀ d − Σ_{e ≤ s} a_iᵀu_e c_e."""
+        base = self.G[rows] @ d
+        out = np.empty((c.size + 1, base.size))
+        out[0] = base
+        np.cumsum(self.GU[rows].T * c[:, None], axis=0, out=out[1:])
+        out[1:] = base - out[1:]
+        return out
+
+    def hold(self, change: np.ndarray, shift: np.ndarray,
+             rows: np.ndarray | slice = slice(None)) -> bool:
+        """Whether the inequalities ``rows`` hold with the given change (E+1, h_rows) and
+        the events moved by ``shift`` (E,) [rad]."""
+        tol = self.tol[rows]
+        if np.any(self.lowest[:, rows] + change < -tol):
+            return False
+        at = self.at_event[:, rows] + self.event_rate[:, rows] * shift[:, None] + change[:-1]
+        return not np.any(at < -tol)
+
+    def at_risk(self, reach: float, max_shift: float) -> np.ndarray:
+        """Indices of the inequalities that a state change of at most ``reach`` [m] (on
+        every interval) and events moved by at most ``max_shift`` [rad] could make fail:
+        |a_iᵀ M_s d| ≤ ‖a_i‖₁ max_s |M_s d|∞."""
+        slack = self._slack
+        risk = (self._norm * reach >= slack[0]) | (
+            self._norm * reach + self._rate_max * max_shift >= slack[1])
+        return np.flatnonzero(risk)
+
+    def __post_init__(self):
+        low = np.min(self.lowest, axis=0, initial=np.inf) + self.tol
+        at = np.min(self.at_event, axis=0, initial=np.inf) + self.tol
+        object.__setattr__(self, "_slack", (low, at))
+        object.__setattr__(self, "_norm", np.sum(np.abs(self.G), axis=1))
+        object.__setattr__(self, "_rate_max",
+                           np.max(np.abs(self.event_rate), axis=0, initial=0.0))
 
 
-def periodic_step(jac: CycleJacobian, r: np.ndarray, scale: float, *,
-                  rtol: float = 1e-11, max_iter: int = 200) -> PeriodicStep:
-    """x_∞ − x = (I − M)^D r for the increment r = Φ(x) − x of one cycle.
+def piece_constraints(jac: CycleJacobian, log: list, margin_log: list, event_margin_log: list,
+                      K: np.ndarray, friction: np.ndarray, force_tol: float,
+                      disp_tol: float, allow: float = 0.0) -> PieceConstraints | None:
+    """Collect the inequalities of one recorded cycle.
 
     Parameters
     ----------
     jac : CycleJacobian
-        The cycle map's Jacobian recorded over the cycle that produced ``r``.
-    r : (2N,) array
-        Increment of the start-of-cycle state over that cycle [m].
-    scale : float
-        Displacement scale [m]: a component of r outside S above ``rtol·scale`` is a drift
-        no periodic state removes (refused).
-    rtol : float
-        Relative residual of the GMRES solve.
-    max_iter : int
-        Largest Krylov dimension.
+        From :func:`cycle_jacobian` on ``log``.
+    log : list
+        ``Evolution.jacobian_log`` of the cycle.
+    margin_log : list of (4, N) arrays
+        ``Evolution.margin_log`` of the same cycle (one more entry than ``log``): the
+        smallest f p + q, f p − q (stuck), p (slipping) and w (open) at the load
+        samples of each interval.
+    event_margin_log : list of ((4, N), (4, N)) tuples
+        ``Evolution.event_margin_log``: their values at each event and rates before it.
+    K : (2N, 2N) array
+    friction : (N,) array
+    force_tol, disp_tol : float
+        Round-off allowances of the force [N] and gap [m] inequalities.
+    allow : float
+        A displacement [m] too small to matter (the cycling tolerance): an inequality may
+        fail by what a slip or an opening of that size would relieve.
 
     Returns
     -------
-    PeriodicStep
+    PieceConstraints or None
+        None when the log and the margins do not match.
     """
-    S = jac.S
-    rS = r[S]
-    out = np.ones(r.size, bool)
-    out[S] = False
-    if np.any(np.abs(r[out]) > rtol * scale):
-        return PeriodicStep(None, "drift outside the coordinates the events move", np.nan, 0)
-    beta = float(np.linalg.norm(rS))
-    delta = np.zeros(r.size)
-    if beta == 0.0:
-        return PeriodicStep(delta, "", 0.0, 0)
-    m = S.size
-    kmax = min(m, max_iter)
-    Q = np.zeros((kmax + 1, m))
-    H = np.zeros((kmax + 1, kmax))     # Arnoldi's Hessenberg matrix (for the Ritz values)
-    R = np.zeros((kmax + 1, kmax))     # its QR factor by Givens rotations
-    cs = np.zeros(kmax)
-    sn = np.zeros(kmax)
-    g = np.zeros(kmax + 1)             # rotated right-hand side β e₁
-    g[0] = beta
-    Q[0] = rS / beta
-    k = 0
-    for k in range(kmax):
-        w = jac.apply(Q[k])
-        for _ in range(2):  # classical Gram–Schmidt, twice (orthogonal to round-off)
-            h = Q[:k + 1] @ w
-            H[:k + 1, k] += h
-            w -= h @ Q[:k + 1]
-        H[k + 1, k] = np.linalg.norm(w)
-        col = H[:k + 2, k].copy()
-        for i in range(k):
-            col[i], col[i + 1] = (cs[i] * col[i] + sn[i] * col[i + 1],
-                                  -sn[i] * col[i] + cs[i] * col[i + 1])
-        d = np.hypot(col[k], col[k + 1])
-        cs[k], sn[k] = (1.0, 0.0) if d == 0.0 else (col[k] / d, col[k + 1] / d)
-        col[k], col[k + 1] = d, 0.0
-        R[:k + 2, k] = col
-        g[k], g[k + 1] = cs[k] * g[k], -sn[k] * g[k]
-        if abs(g[k + 1]) <= rtol * beta or H[k + 1, k] <= 1e-14 * beta:
-            break
-        Q[k + 1] = w / H[k + 1, k]
-    k += 1
-    # least squares min |β e₁ − H y| by the truncated SVD of Arnoldi's Hessenberg matrix:
-    # singular values of I − M at round-off level relative to the largest are neutral
-    # directions (eigenvalue 1 of M: stuck memory, an open node's p = q = 0) that
-    # round-off lets into the Krylov space; a triangular solve would divide r's round-off
-    # component along them by ~0 and throw the state far off its piece. The minimum-norm
-    # solution leaves them out, as the Drazin inverse does.
-    Uh, sv, Vh = np.linalg.svd(H[:k + 1, :k], full_matrices=False)
-    keep = sv > NEUTRAL * sv[0]
-    rhs = np.zeros(k + 1)
-    rhs[0] = beta
-    c = Uh[:, keep].T @ rhs
-    y = Vh[keep].T @ (c / sv[keep])
-    res = float(np.linalg.norm(rhs - H[:k + 1, :k] @ y))
-    if res > 1e3 * rtol * beta:
-        return PeriodicStep(None, f"no solution in the Krylov space (relative residual "
-                                  f"{res / beta:.2g}): drift or a neutral direction", np.nan, k)
-    ritz = np.linalg.eigvals(H[:k, :k])
-    # Ritz values of I − M at round-off level are the neutral directions (eigenvalue 1 of
-    # M: stuck memory, the p = q = 0 of an open node) that round-off lets into the Krylov
-    # space; the solution has no part along them (the step's size is checked by the
-    # caller). Every other one must be a contraction of M.
-    active = np.abs(ritz) > 1e-8
-    rho = float(np.max(np.abs(1.0 - ritz[active]), initial=0.0))
-    if not np.all(np.isfinite(ritz)) or rho >= 1.0 - 1e-9:
-        return PeriodicStep(None, f"cycle map not contracting (|eigenvalue| ≈ {rho:.6g})",
-                            rho, k)
-    delta[S] = Q[:k].T @ y
-    return PeriodicStep(delta, "", rho, k)
+    n = K.shape[0] // 2
+    E = len(log)
+    if len(margin_log) != E + 1 or len(event_margin_log) != E or jac.U.shape[0] != E:
+        return None
+    S, m = jac.S, jac.S.size
+    low = np.array(margin_log)                          # (E+1, 4, N)
+    at = np.array([v for v, _ in event_margin_log]).reshape(E, *low.shape[1:])
+    rate = np.array([g for _, g in event_margin_log]).reshape(E, *low.shape[1:])
+    kind, node = np.nonzero(np.isfinite(low).any(axis=0) | np.isfinite(at).any(axis=0))
+    f = np.asarray(friction, float)[node]
+    Kq, Kp = K[np.ix_(node, S)], K[np.ix_(n + node, S)]
+    sq = np.select([kind == 0, kind == 1], [1.0, -1.0], 0.0)
+    sp = np.select([kind <= 1, kind == 2], [f, 1.0], 0.0)
+    G = sq[:, None] * Kq + sp[:, None] * Kp
+    gap = np.flatnonzero(kind == 3)
+    pos = np.searchsorted(S, n + node[gap])
+    hit = (pos < m) & (S[np.minimum(pos, m - 1)] == n + node[gap])
+    G[gap[hit], pos[hit]] = 1.0
+    # an inequality that neither the moving coordinates nor the events' moving change
+    # cannot fail
+    moves = np.isfinite(at[:, kind, node]) & (rate[:, kind, node] != 0.0)
+    live = np.any(G != 0.0, axis=1) | np.any(moves, axis=0)
+    G = np.ascontiguousarray(G[live])
+    tol = np.maximum(np.where(kind == 3, disp_tol, force_tol)[live],
+                     allow * np.max(np.abs(G), axis=1, initial=0.0))
+    k, j = kind[live], node[live]
+    return PieceConstraints(np.ascontiguousarray(low[:, k, j]),
+                            np.ascontiguousarray(at[:, k, j]),
+                            np.nan_to_num(rate[:, k, j], posinf=0.0, neginf=0.0), G,
+                            np.ascontiguousarray(G @ jac.U.T), tol)
 
 
-def stays_one_way(jac: CycleJacobian, r: np.ndarray, one_way: np.ndarray, tiny: float,
-                  max_cycles: int = 5000, max_work: float = 2e9) -> bool:
-    """Whether the cycles that the step stands for keep every one-way slip one way.
+@njit(cache=True)
+def _apply_map_coefficients(U, A, v, c):
+    """M v in place, with the coefficient c_e = a_eᵀ (M_{e−1} v) of every factor in c."""
+    E, m = U.shape
+    for e in range(E):
+        s = 0.0
+        for i in range(m):
+            s += A[e, i] * v[i]
+        c[e] = s
+        if s != 0.0:
+            for i in range(m):
+                v[i] -= U[e, i] * s
+    return v
 
-    On the piece, the increments of successive cycles are r, M r, M² r, …; a node that
-    slips in one direction only (``one_way[j]`` = +1 or −1) has increment ``one_way[j]``·
-    (M^k r)_j ≥ 0 for every k while plain cycling stays on the piece. A reversal means
-    that plain cycling leaves the piece (the node stops slipping after finitely many
-    cycles, frozen where the step would not put it): the step must not be taken.
+
+
+@dataclass(frozen=True)
+class ModeIntervals:
+    """Every node's intervals of one mode in the recorded cycle that an event begins or
+    ends (``Evolution.episode_log``).
+
+    A perturbed start moves the events (:meth:`CycleJacobian.event_shift`); events of
+    different nodes may pass each other (a neighbouring piece of the cycle map, which the
+    continuity of the map joins to this one), but an interval whose length would go
+    below zero means that a node's sequence of modes changes: a slip that shrinks to
+    nothing, a stick between two slips that vanishes, an opening that closes.
+
+    Attributes
+    ----------
+    start, end : (k,) int arrays
+        Index of the event that begins / ends each interval, −1 for a load sample or an
+        end of the cycle (which do not move).
+    length : (k,) array
+        Recorded length of each interval [rad].
+    tol : (k,) array
+        Negative length allowed [rad]: round-off, or the time in which the rate jump of
+        its events moves the state by the allowed displacement.
+    """
+
+    start: np.ndarray
+    end: np.ndarray
+    length: np.ndarray
+    tol: np.ndarray
+
+    @classmethod
+    def from_log(cls, episode_log: list, jac: CycleJacobian, tol: float,
+                 allow: float = 0.0) -> ModeIntervals:
+        """From ``Evolution.episode_log``; ``tol`` [rad] is round-off, ``allow`` [m] a
+        displacement too small to matter (the cycling tolerance): an interval may go
+        negative by allow / |ẋ⁻ − ẋ⁺| of its events, |ẋ⁻ − ẋ⁺| = |u_e ġ_e|∞."""
+        ep = np.array(episode_log, float).reshape(-1, 5)
+        start, end = ep[:, 1].astype(int), ep[:, 3].astype(int)
+        jump = np.concatenate([np.max(np.abs(jac.U), axis=1, initial=0.0)
+                               * np.abs(jac.rate), [0.0]])
+        worst = np.maximum(jump[start], jump[end])
+        with np.errstate(divide="ignore"):
+            slack = np.where(worst > 0.0, allow / worst, np.inf)
+        return cls(start, end, ep[:, 4] - ep[:, 2], np.maximum(tol, slack))
+
+    def hold(self, shift: np.ndarray) -> bool:
+        """Whether every interval keeps a non-negative length when the events move by
+        ``shift`` (E,) [rad]."""
+        if self.length.size == 0:
+            return True
+        s = np.concatenate([shift, [0.0]])              # index −1: does not move
+        return bool(np.all(self.length + s[self.end] - s[self.start] >= -self.tol))
+
+
+@dataclass(frozen=True)
+class PieceRun:
+    """Plain cycling from x followed on one sequence of modes (:func:`follow_piece`).
+
+    Attributes
+    ----------
+    cycles : int
+        The cycles started from x + d_1, …, x + d_k all keep the recorded sequence of
+        modes (d_1 = r is the increment of the recorded cycle); k = ``cycles``.
+    reached : bool
+        The increments M^k r fell below the round-off bound within those cycles: the
+        step's limit is where plain cycling goes.
+    start, after : (m,) arrays
+        d_k and d_{k+1} = d_k + M^k r on the moving coordinates S [m].
+    """
+
+    cycles: int
+    reached: bool
+    start: np.ndarray
+    after: np.ndarray
+
+
+def follow_piece(jac: CycleJacobian, r: np.ndarray, constraints: PieceConstraints,
+                 intervals: ModeIntervals, tiny: float, max_cycles: int = 5000,
+                 max_work: float = 2e9) -> PieceRun:
+    """Follow plain cycling from x on the recorded sequence of modes, without running it.
+
+    On the piece, the increments of successive cycles are r, M r, M² r, …, and cycle k
+    starts from x + d_k, d_k = r + M r + … + M^{k−1} r. Each of those cycles must keep
+    (module docstring)
+
+    - every event in its load segment and in its order, the events moving by
+      δt_e = −c_e / ġ_e with c_e = a_eᵀ M_{e−1} d_k;
+    - every node's intervals of one mode (:class:`ModeIntervals`): a slip that shrinks to
+      nothing stops for good after finitely many cycles, where the piece's periodic state
+      would not freeze it;
+    - every inequality of the nodes' modes on every interval (:class:`PieceConstraints`):
+      a stuck node that touches its friction limit on the way slips and changes the
+      memory the history selects (Barber 2012 §3), however firmly the limit would hold it.
+
+    All are linear in d_k, so one product by M per cycle updates them (O(E m), and
+    O(E) per inequality that a bound on the state change lets come near its margin).
 
     Parameters
     ----------
     jac : CycleJacobian
+        With the event rates ġ_e, times and load segments.
     r : (2N,) array
-        Increment of the last cycle [m].
-    one_way : (N,) int array
-        +1 / −1 for a node that slipped only in that direction, 0 otherwise.
+        Increment of the recorded cycle [m].
+    constraints : PieceConstraints
+    intervals : ModeIntervals
     tiny : float
         Increments below this are round-off [m].
     max_cycles, max_work : int, float
-        Bounds on the linear iterations (k) and on k·E·m; False when they are reached.
+        Bounds on k and on the work.
 
     Returns
     -------
-    bool
+    PieceRun
     """
-    n = one_way.size
     S = jac.S
-    sl = S < n
-    sign = np.zeros(S.size)
-    sign[sl] = one_way[S[sl]]
-    if not np.any(sign):
-        return True
-    e = r[S].copy()
-    cost = max(1, jac.U.size)
-    for _ in range(int(min(max_cycles, max_work / cost))):
-        if np.any(sign * e < -tiny):
-            return False
-        if np.max(np.abs(e)) <= tiny:
-            return True
-        e = _apply_map(jac.U, jac.A, e)
-    return False
+    cost = max(1, 2 * jac.U.size)
+    kmax = int(min(max_cycles, max_work / cost))
+    k, reached, d, e = _follow(
+        jac.U, jac.A, jac.rate, jac.time - jac.lo, jac.hi - jac.time,
+        np.concatenate([[False], jac.lo[1:] == jac.lo[:-1]]),
+        np.concatenate([[0.0], np.diff(jac.time)]), intervals.start,
+        intervals.end, intervals.length, intervals.tol, constraints.G, constraints.GU,
+        constraints.lowest, constraints.at_event, constraints.event_rate, constraints.tol,
+        constraints._slack[0], constraints._slack[1], constraints._norm,
+        constraints._rate_max, r[S].copy(), tiny, kmax)
+    return PieceRun(k, reached, d, d + e)
+
+
+@njit(cache=True)
+def _follow(U, A, rate, room_before, room_after, same_segment, gap, iv_start, iv_end,
+            iv_length, iv_tol, G, GU, lowest, at_event, event_rate, tol, slack_low, slack_at,
+            norm, rate_max, e, tiny, kmax):
+    """The loop of :func:`follow_piece`; returns (k, reached, d_k, M^k r) on S.
+
+    Both checks are linear in (d_k, c(d_k)). The inequalities are checked exactly only
+    where a bound on the state change could reach their margin:
+    |a_iᵀ M_s d_k| ≤ ‖a_i‖₁ Σ_k (|e_k|∞ + Σ_e |u_e|∞ |c_e(e_k)|)."""
+    E, m = U.shape
+    h = G.shape[0]
+    u_max = np.zeros(E)
+    for ev in range(E):
+        for i in range(m):
+            u_max[ev] = max(u_max[ev], abs(U[ev, i]))
+    d = np.zeros(m)
+    coef = np.zeros(E)
+    shift = np.zeros(E)
+    nxt = np.empty(m)
+    dn = np.empty(m)
+    reach = 0.0
+    for k in range(kmax):
+        emax = 0.0
+        for i in range(m):
+            nxt[i] = e[i]
+            emax = max(emax, abs(e[i]))
+        reach += emax
+        for ev in range(E):                     # M e, and the coefficients c_e
+            s = 0.0
+            for i in range(m):
+                s += A[ev, i] * nxt[i]
+            coef[ev] += s
+            reach += u_max[ev] * abs(s)
+            if s != 0.0:
+                for i in range(m):
+                    nxt[i] -= U[ev, i] * s
+        max_shift = 0.0
+        for ev in range(E):
+            shift[ev] = -coef[ev] / rate[ev]
+            max_shift = max(max_shift, abs(shift[ev]))
+            # an event that passes a load sample or another event changes the modes the
+            # rates after it are solved with: another piece of the map
+            if (shift[ev] < -room_before[ev] - SEGMENT_TOL
+                    or shift[ev] > room_after[ev] + SEGMENT_TOL):
+                return k, False, d, e
+            if (ev > 0 and same_segment[ev]
+                    and shift[ev] + gap[ev] < shift[ev - 1] - SEGMENT_TOL):
+                return k, False, d, e
+        for t in range(iv_length.size):         # every mode interval keeps its length
+            length = iv_length[t]
+            if iv_end[t] >= 0:
+                length += shift[iv_end[t]]
+            if iv_start[t] >= 0:
+                length -= shift[iv_start[t]]
+            if length < -iv_tol[t]:
+                return k, False, d, e
+        for i in range(m):
+            dn[i] = d[i] + e[i]
+        for r in range(h):                      # the inequalities that could fail
+            if not (norm[r] * reach >= slack_low[r]
+                    or norm[r] * reach + rate_max[r] * max_shift >= slack_at[r]):
+                continue
+            base = 0.0
+            for i in range(m):
+                base += G[r, i] * dn[i]
+            if lowest[0, r] + base < -tol[r]:
+                return k, False, d, e
+            change = base
+            for ev in range(E):
+                if at_event[ev, r] + event_rate[ev, r] * shift[ev] + change < -tol[r]:
+                    return k, False, d, e
+                change -= GU[r, ev] * coef[ev]
+                if lowest[ev + 1, r] + change < -tol[r]:
+                    return k, False, d, e
+        for i in range(m):
+            d[i] = dn[i]
+            e[i] = nxt[i]
+        emax = 0.0
+        for i in range(m):
+            emax = max(emax, abs(e[i]))
+        if emax <= tiny:
+            return k + 1, True, d, e
+    return kmax, False, d, e

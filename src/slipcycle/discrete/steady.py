@@ -14,10 +14,11 @@ is reached. The steady cycle is classified as
 Dissipation per node D_j = −∮ q_j dv_j and in total are those of the last cycle run; the
 energy balance Σ D_j = ∮ (vᵀdq^w + wᵀdp^w) is checked on it.
 
-Where the state creeps geometrically towards its periodic orbit, :func:`simulate` steps to
-the limit of that creep (Newton's method on the piecewise-affine cycle map, with the
-Drazin inverse that keeps the memory of the stuck nodes: :mod:`~slipcycle.discrete.periodic`)
-and checks every step by an exact cycle; ``accelerate=False`` is plain cycling.
+Where the state creeps geometrically towards its periodic orbit, :func:`simulate` follows
+plain cycling on the current piece of the piecewise-affine cycle map without running its
+cycles (:mod:`~slipcycle.discrete.periodic`), skips to where it leaves the piece or to its
+limit, with the memory of the stuck nodes that plain cycling gives them, and checks every
+skip by an exact cycle; ``accelerate=False`` is plain cycling.
 """
 
 from __future__ import annotations
@@ -31,7 +32,12 @@ from slipcycle.discrete.evolution import Evolution
 from slipcycle.discrete.lcp import lemke
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
-from slipcycle.discrete.periodic import cycle_jacobian, periodic_step, stays_one_way
+from slipcycle.discrete.periodic import (
+    ModeIntervals,
+    cycle_jacobian,
+    follow_piece,
+    piece_constraints,
+)
 from slipcycle.errors import InadmissibleInitialState
 from slipcycle.loading.nodal import force_scale
 
@@ -53,9 +59,20 @@ ACCELERATE_MIN_NODES = 16
 #: periodic-state steps refused by their checking cycle before a run stops trying
 MAX_PERIODIC_REJECTIONS = 5
 
-#: two consecutive cycles' predictions of the periodic state must agree to this fraction of
-#: the distance still to go before a step is taken
-AGREE = 0.1
+#: a node's interval of one mode may shrink this far below zero [rad] before a step
+#: counts as changing its sequence of modes (round-off of simultaneous events)
+INTERVAL_TOL = 1e-9
+
+#: fewest cycles on one sequence of modes worth skipping (a skip costs a checking cycle)
+MIN_SKIP = 3
+
+#: a skip's checking cycle must land on the predicted start to this fraction of the skip's
+#: length (round-off of the products by M, and changes below the cycling tolerance; 7e-10
+#: measured on the FE blocks)
+SKIP_MATCH = 1e-6
+
+#: most cycles followed on one piece at once (a longer path is skipped in parts)
+MAX_FOLLOW = 1000
 
 #: a steady state reached with steps is polished by one more step down to this fraction
 #: of the steady-state tolerance
@@ -74,30 +91,55 @@ def _same_piece(moving: frozenset, moving_step: frozenset, totals, force_tol: fl
 
 
 def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
-                     increment: np.ndarray, r_w0: np.ndarray, drift_tol: float,
-                     one_way: np.ndarray | None = None):
-    """The periodic state that cycling from ``x`` tends to, by one step of Newton's method
-    on the cycle map (:mod:`~slipcycle.discrete.periodic`), or None.
+                     increment: np.ndarray, r_w0: np.ndarray, drift_tol: float):
+    """Where plain cycling from ``x`` goes, found without running its cycles (the cycle
+    map is piecewise affine: :mod:`~slipcycle.discrete.periodic`).
 
-    ``increment`` = Φ(x) − x of the cycle just run, whose Jacobian ``evo.jacobian_log``
-    holds. The step is refused when the cycle map is not clearly contracting on it (a Ritz
-    value of M at or above 0.999), when it is more than 1000 increments long, when the
-    cycles it stands for would reverse the slip of a node that slips one way (``one_way``:
-    +1, −1, 0 per node; plain cycling would leave the piece there and freeze that node
-    elsewhere), or when the state it gives violates a friction or contact inequality at
-    θ = 0.
+    ``increment`` = Φ(x) − x of the cycle just run, whose Jacobian, event rates and
+    segments, mode intervals and inequalities ``evo`` recorded. Plain cycling is followed
+    on that piece of the map, one product by the cycle's Jacobian per cycle
+    (:func:`~slipcycle.discrete.periodic.follow_piece`):
+
+    - if it stays on the piece until its increments fall below a thousandth of the
+      cycling tolerance, the answer is where it arrives: the periodic state of the piece
+      with the memory plain cycling gives it (refused when it violates a friction or
+      contact inequality at θ = 0);
+    - if it leaves the piece after k ≥ :data:`MIN_SKIP` cycles (or after the most cycles
+      followed at once), the answer is the start of the last cycle on the piece, x + d_k,
+      with the start that cycle leads to, x + d_{k+1}, which the next cycle run must
+      reproduce.
+
+    Nothing counts that moves the state by less than the cycling tolerance ``drift_tol``.
+
+    Returns
+    -------
+    (target, predicted) : ((2N,) array, (2N,) array or None) or None
+        ``predicted`` is None for a periodic state.
     """
     jac = cycle_jacobian(evo.jacobian_log, system.K, system.friction)
-    if jac is None:
+    if jac is None or jac.rate is None:
         return None
-    step = periodic_step(jac, increment, 1e-3 * drift_tol)
-    if step.delta is None or not step.spectral_radius < 0.999:
+    outside = np.ones(increment.size, bool)
+    outside[jac.S] = False
+    if np.any(np.abs(increment[outside]) > 1e-3 * drift_tol):
+        return None     # a change that no event of the cycle makes: drift, or not a piece
+    cons = piece_constraints(jac, evo.jacobian_log, evo.margin_log, evo.event_margin_log,
+                             system.K, system.friction, 10 * evo.force_tol,
+                             10 * evo.solver.disp_tol, drift_tol)
+    if cons is None:
         return None
-    if np.max(np.abs(step.delta)) > 1e3 * np.max(np.abs(increment)):
-        return None
-    if one_way is not None and not stays_one_way(jac, increment, one_way, 1e-3 * drift_tol):
-        return None
-    target = x + step.delta
+    intervals = ModeIntervals.from_log(evo.episode_log, jac, INTERVAL_TOL, drift_tol)
+    run = follow_piece(jac, increment, cons, intervals, 1e-3 * drift_tol,
+                       max_cycles=MAX_FOLLOW)
+    target = x.copy()
+    if not run.reached:
+        if run.cycles < MIN_SKIP:
+            return None
+        target[jac.S] += run.start
+        predicted = x.copy()
+        predicted[jac.S] += run.after
+        return target, predicted
+    target[jac.S] += run.after
     n = system.n_nodes
     r = r_w0 + system.K @ target
     q, p, w = r[:n], r[n:], target[n:]
@@ -105,7 +147,7 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
     open_ = w > evo.solver.disp_tol
     bad = np.where(open_, (np.abs(q) > ftol) | (np.abs(p) > ftol),
                    (np.abs(q) > system.friction * p + ftol) | (p < -ftol)) | (w < -dtol)
-    return None if bad.any() else target
+    return None if bad.any() else (target, None)
 
 
 @dataclass
@@ -279,10 +321,9 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     saved = None           # what to restore if the cycle checking a periodic step fails
     rejects_left, wait = MAX_PERIODIC_REJECTIONS, 0
     moving_prev = None     # nodes the events of the last kept cycle moved
-    estimate = None        # the periodic state predicted from the last kept cycle
     for c in range(cycles):
         if accel:
-            evo.jacobian_log = []
+            evo.jacobian_log, evo.margin_log = [], []
         totals = evo.follow(theta, vals, record=record)
         evo.resync()
         if progress is not None:
@@ -301,8 +342,18 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         # nodes that slipped (beyond round-off) or opened in this cycle
         moving = frozenset(np.flatnonzero((totals.slip_length > 1e-3 * tol * xscale)
                                           | totals.separated).tolist()) if accel else None
-        if checking is not None and not _same_piece(moving, checking[4], totals, 10 * tol * F):
-            residual = np.inf      # the step left its piece: refuse it (below)
+        refuse = False
+        if checking is not None and checking[5] is not None:
+            # a skip: the checking cycle must land where plain cycling goes
+            skip = float(np.max(np.abs(starts[-2] - checking[0])))
+            refuse = (np.max(np.abs(starts[-1] - checking[5]))
+                      > SKIP_MATCH * skip + 1e-3 * tol * xscale)
+        elif checking is not None:
+            # a periodic state: the cycle from it stays on its piece and gets closer
+            refuse = (not _same_piece(moving, checking[4], totals, 10 * tol * F)
+                      or residual > 0.5 * checking[3])
+        if refuse:
+            residual = np.inf
         if c + 1 < min_cycles and checking is None:
             moving_prev = moving
             continue
@@ -314,21 +365,20 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         if residual <= tol and c + 1 >= min_cycles and not polish:
             state = "steady"
             break
-        if checking is not None and residual > 0.5 * checking[3]:
-            # the step did not bring the state closer to the periodic one (it left the
-            # piece of the cycle map it was computed on): discard the checking cycle and
-            # go on cycling from where the step was taken
+        if refuse:
+            # the step did not go where plain cycling goes (it left the piece of the
+            # cycle map it was computed on): discard the checking cycle and go on cycling
+            # from where the step was taken
             for lst in (starts, events, diss_hist) + ((xs, rs, ms) if record else ()):
                 lst.pop()
             targets.discard(len(starts) - 1)
-            starts[-1], evo.modes, totals, residual, moving_prev = checking
+            starts[-1], evo.modes, totals, residual, moving_prev = checking[:5]
             evo.x = starts[-1].copy()
             evo.resync()
             jstats["periodic_steps_rejected"] += 1
             jstats["cycles_discarded"] += 1
             rejects_left -= 1
             wait = 2
-            estimate = None
             if residual <= tol and c + 1 >= min_cycles:
                 state = "steady"      # the state the refused polishing step started from
                 break
@@ -346,28 +396,19 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
                 break
         if accel and rejects_left > 0 and wait == 0 and c + 1 < cycles and same:
             # the same nodes moved in the last two cycles: the cycle map is on one piece
-            one_way = np.where(totals.separated, 0, totals.slipped_positive.astype(int)
-                               - totals.slipped_negative.astype(int))
-            target = _periodic_target(evo, system, starts[-2], d1, vals[0], tol * xscale,
-                                      one_way)
-            # two consecutive cycles must predict the same limit: a Jacobian of a passing
-            # piece would otherwise freeze a node where plain cycling does not
-            agree = target is not None and estimate is not None and (
-                np.max(np.abs(target - estimate))
-                <= AGREE * np.max(np.abs(target - starts[-1])) + tol * xscale)
-            estimate, target = target, (target if agree else None)
+            step = _periodic_target(evo, system, starts[-2], d1, vals[0], tol * xscale)
+            target, predicted = step if step is not None else (None, None)
             if target is None and residual <= tol:
                 state = "steady"
                 break
             if target is not None:
                 jstats["periodic_steps"] += 1
-                saved = (starts[-1].copy(), evo.modes.copy(), totals, residual, moving)
+                saved = (starts[-1].copy(), evo.modes.copy(), totals, residual, moving,
+                         predicted)
                 starts[-1] = target
                 targets.add(len(starts) - 1)
                 evo.x = target.copy()
                 evo.resync()
-        else:
-            estimate = None
         wait = max(wait - 1, 0)
         moving_prev = moving
     return _steady_result(system, evo, state, residual, ratchet, totals, starts, events,
