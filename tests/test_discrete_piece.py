@@ -46,7 +46,7 @@ def _recorded_cycles(system, load, cycles, steps=40):
         cons = piece_constraints(jac, evo.jacobian_log, evo.margin_log,
                                  evo.event_margin_log, system.K, system.friction,
                                  10 * evo.force_tol, 1e-12)
-        out.append((x0, evo.x.copy(), jac, cons, ModeIntervals.from_log(evo.episode_log, jac, 0.0),
+        out.append((x0, evo.x.copy(), jac, cons, ModeIntervals.from_log(evo.episode_log, 0.0),
                     evo.signature.digest()))
     return out, F
 

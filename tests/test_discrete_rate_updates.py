@@ -134,3 +134,20 @@ def test_single_node_events_update_in_place_without_refactorizing(seed, n, steps
         np.testing.assert_allclose(got[0], xd, rtol=0, atol=1e-9 * (np.abs(xd).max() + 1e-300))
         np.testing.assert_allclose(got[1], rd, rtol=0, atol=1e-9 * np.abs(rd).max() + 1e-12)
     assert solver.stats["factorizations"] == 1
+
+
+def test_node_at_the_apex_of_its_friction_limit_may_open():
+    """A node in contact with q = 0 and a pressure between the force tolerance and
+    tolerance/f sits on both sides of its friction limit (f p ± q ≤ tol), i.e. at the
+    apex. A load rate that pulls it open must open it (ẇ = 1/k_n per unit pull) instead of
+    leaving the rate problem without a solution (seen as Lemke's ray termination on a
+    random 6-node system, seed 38096, with f = 0.58 f_crit)."""
+    system = FrictionalSystem(np.array([[2.0]]), np.array([[0.0]]), np.array([[4.0]]), 0.3)
+    tol = 1e-9
+    solver = RateSolver(system, tol)
+    x = np.zeros(2)
+    r = np.array([0.0, 1.5 * tol])          # p above tol, f p below it
+    modes, xd, rd = solver.solve(x, r, np.array([0.0, -1.0]), np.array([STICK], np.int8))
+    assert modes[0] == SEPARATED
+    assert xd[1] == 0.25
+    assert rd[1] == 0.0

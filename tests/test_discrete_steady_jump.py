@@ -100,6 +100,9 @@ def _random_case(seed: int, n: int, sep: bool):
 @example(seed=212, n=4, sep=True, start="load")
 @example(seed=57221, n=6, sep=True, start="load")
 @example(seed=76848, n=3, sep=True, start="load")
+# a node at the apex of its friction limit that the load pulls open (no rate solution
+# before the apex could open)
+@example(seed=38096, n=6, sep=False, start="load")
 def test_random_systems_same_steady_state_with_and_without_the_step(seed, n, sep, start):
     """Whatever the class (shakedown, cyclic slip, ratcheting, with or without separation),
     the step changes nothing but the number of cycles: same class, stuck and slipping
@@ -115,9 +118,8 @@ def test_random_systems_same_steady_state_with_and_without_the_step(seed, n, sep
     except InadmissibleInitialState:      # nothing to compare
         assume(False)
     except RateProblemError:
-        # Lemke's method ends on a ray for the rate problem of this state (seen 3 times in
-        # 2400 samples, e.g. seed 38096, n = 6, no separation, f = 0.58 f_crit): plain
-        # cycling stops with that error, so there is nothing to compare here
+        # ill posed once some nodes open: f is kept below f_crit of the whole system only
+        # (seed 68677: f = 0.895, f_crit = 0.878 with node 2 open; 2 in 2400 samples)
         assume(False)
     fast = simulate(system, load, accelerate=True, **kw)
     assume(plain.steady_state != "not_converged")

@@ -114,6 +114,32 @@ def _accumulate(modes, x, r, xd, rd, rw, dt, diss, slip_len, spos, sneg, sep, di
     return work * dt, erased, x1, r1
 
 
+@njit(cache=True)
+def _margin_rows(modes, f, x, r, out, lowest):
+    """Per node the inequalities of its mode into ``out`` (4, N), or their minimum with
+    ``out`` when ``lowest``: f p + q and f p − q while stuck, p while slipping, w while
+    open, +inf where one does not apply (``Evolution.margin_log``)."""
+    n = modes.size
+    for j in range(n):
+        m = modes[j]
+        p = r[n + j]
+        a = b = c = d = np.inf
+        if m == STICK:
+            a = f[j] * p + r[j]
+            b = f[j] * p - r[j]
+        elif m == SEPARATED:
+            d = x[n + j]
+        else:
+            c = p
+        if lowest:
+            out[0, j] = min(out[0, j], a)
+            out[1, j] = min(out[1, j], b)
+            out[2, j] = min(out[2, j], c)
+            out[3, j] = min(out[3, j], d)
+        else:
+            out[0, j], out[1, j], out[2, j], out[3, j] = a, b, c, d
+
+
 @dataclass
 class PathTotals:
     """Accumulated quantities over a load path (one cycle, or the assembly).
@@ -230,7 +256,7 @@ class Evolution:
             self._close_episodes(np.flatnonzero(changed),
                                  len(self.jacobian_log) if after_event else -1, theta)
         if not after_event:
-            np.minimum(self._lowest, self._margins(modes, self.x, self.r), out=self._lowest)
+            _margin_rows(modes, self.f, self.x, self.r, self._lowest, True)
             return
         value, rate = self._at_event
         value[:, changed] = np.inf
@@ -250,17 +276,8 @@ class Evolution:
         """The inequalities the modes ``m`` must keep, per node (4, N): f p + q and
         f p − q while stuck, p while slipping, w while open, +inf where they do not apply;
         of the state (x, r), or their rates from the rates (ẋ, ṙ)."""
-        n = self.n
-        q, p = r[:n], r[n:]
-        fp = self.f * p
-        out = np.full((4, n), np.inf)
-        stick = m == STICK
-        out[0, stick] = fp[stick] + q[stick]
-        out[1, stick] = fp[stick] - q[stick]
-        slip = (m == SLIP_POS) | (m == SLIP_NEG)
-        out[2, slip] = p[slip]
-        sep = m == SEPARATED
-        out[3, sep] = x[n:][sep]
+        out = np.empty((4, self.n))
+        _margin_rows(m, self.f, x, r, out, False)
         return out
 
     def _next_event(self, modes, x, r, xd, rd, remaining):
@@ -316,8 +333,7 @@ class Evolution:
                 self.event_log.append((self.x.copy(), self.r.copy(), modes.copy()))
             if self._lowest is not None:
                 if event is None:
-                    np.minimum(self._lowest, self._margins(modes, self.x, self.r),
-                               out=self._lowest)
+                    _margin_rows(modes, self.f, self.x, self.r, self._lowest, True)
                 else:                       # the interval ends at this event
                     self._at_event = (self._margins(modes, self.x, self.r),
                                       self._margins(modes, xd, rd))

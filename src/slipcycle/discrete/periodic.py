@@ -178,8 +178,7 @@ class PieceConstraints:
     GU : (h, E) array
         a_iᵀ u_e: change of each inequality per unit coefficient of factor e.
     tol : (h,) array
-        How far below zero an inequality may go [N or m]: round-off, or the force that
-        slipping by the allowed displacement would relieve (``allow`` ‖a_i‖∞).
+        How far below zero an inequality may go (round-off) [N or m].
     """
 
     lowest: np.ndarray
@@ -220,6 +219,12 @@ class PieceConstraints:
             self._norm * reach + self._rate_max * max_shift >= slack[1])
         return np.flatnonzero(risk)
 
+    @classmethod
+    def none(cls, E: int, m: int) -> PieceConstraints:
+        """No inequalities (to follow the events and mode intervals alone)."""
+        return cls(np.zeros((E + 1, 0)), np.zeros((E, 0)), np.zeros((E, 0)),
+                   np.zeros((0, m)), np.zeros((0, E)), np.zeros(0))
+
     def __post_init__(self):
         low = np.min(self.lowest, axis=0, initial=np.inf) + self.tol
         at = np.min(self.at_event, axis=0, initial=np.inf) + self.tol
@@ -231,7 +236,7 @@ class PieceConstraints:
 
 def piece_constraints(jac: CycleJacobian, log: list, margin_log: list, event_margin_log: list,
                       K: np.ndarray, friction: np.ndarray, force_tol: float,
-                      disp_tol: float, allow: float = 0.0) -> PieceConstraints | None:
+                      disp_tol: float) -> PieceConstraints | None:
     """Collect the inequalities of one recorded cycle.
 
     Parameters
@@ -250,9 +255,6 @@ def piece_constraints(jac: CycleJacobian, log: list, margin_log: list, event_mar
     friction : (N,) array
     force_tol, disp_tol : float
         Round-off allowances of the force [N] and gap [m] inequalities.
-    allow : float
-        A displacement [m] too small to matter (the cycling tolerance): an inequality may
-        fail by what a slip or an opening of that size would relieve.
 
     Returns
     -------
@@ -282,8 +284,7 @@ def piece_constraints(jac: CycleJacobian, log: list, margin_log: list, event_mar
     moves = np.isfinite(at[:, kind, node]) & (rate[:, kind, node] != 0.0)
     live = np.any(G != 0.0, axis=1) | np.any(moves, axis=0)
     G = np.ascontiguousarray(G[live])
-    tol = np.maximum(np.where(kind == 3, disp_tol, force_tol)[live],
-                     allow * np.max(np.abs(G), axis=1, initial=0.0))
+    tol = np.where(kind == 3, disp_tol, force_tol)[live]
     k, j = kind[live], node[live]
     return PieceConstraints(np.ascontiguousarray(low[:, k, j]),
                             np.ascontiguousarray(at[:, k, j]),
@@ -326,8 +327,7 @@ class ModeIntervals:
     length : (k,) array
         Recorded length of each interval [rad].
     tol : (k,) array
-        Negative length allowed [rad]: round-off, or the time in which the rate jump of
-        its events moves the state by the allowed displacement.
+        Negative length allowed (round-off) [rad].
     """
 
     start: np.ndarray
@@ -336,19 +336,11 @@ class ModeIntervals:
     tol: np.ndarray
 
     @classmethod
-    def from_log(cls, episode_log: list, jac: CycleJacobian, tol: float,
-                 allow: float = 0.0) -> ModeIntervals:
-        """From ``Evolution.episode_log``; ``tol`` [rad] is round-off, ``allow`` [m] a
-        displacement too small to matter (the cycling tolerance): an interval may go
-        negative by allow / |ẋ⁻ − ẋ⁺| of its events, |ẋ⁻ − ẋ⁺| = |u_e ġ_e|∞."""
+    def from_log(cls, episode_log: list, tol: float) -> ModeIntervals:
+        """From ``Evolution.episode_log``, with the round-off allowance ``tol`` [rad]."""
         ep = np.array(episode_log, float).reshape(-1, 5)
-        start, end = ep[:, 1].astype(int), ep[:, 3].astype(int)
-        jump = np.concatenate([np.max(np.abs(jac.U), axis=1, initial=0.0)
-                               * np.abs(jac.rate), [0.0]])
-        worst = np.maximum(jump[start], jump[end])
-        with np.errstate(divide="ignore"):
-            slack = np.where(worst > 0.0, allow / worst, np.inf)
-        return cls(start, end, ep[:, 4] - ep[:, 2], np.maximum(tol, slack))
+        return cls(ep[:, 1].astype(int), ep[:, 3].astype(int), ep[:, 4] - ep[:, 2],
+                   np.full(ep.shape[0], tol))
 
     def hold(self, shift: np.ndarray) -> bool:
         """Whether every interval keeps a non-negative length when the events move by

@@ -178,7 +178,10 @@ class RateSolver:
         sep = w > self.disp_tol
         gp = (f * p + q <= tol) & ~sep
         gm = (f * p - q <= tol) & ~sep
-        p0 = (p <= tol) & ~sep
+        # both sides of the friction limit active means f p ≤ tol: the node is at the
+        # apex, where it may open too (without that option a load that pulls it open has
+        # no rate solution)
+        p0 = ((p <= tol) | (gp & gm)) & ~sep
         return gp, gm, p0, sep
 
     @property

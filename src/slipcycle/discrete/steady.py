@@ -34,6 +34,7 @@ from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.periodic import (
     ModeIntervals,
+    PieceConstraints,
     cycle_jacobian,
     follow_piece,
     piece_constraints,
@@ -67,8 +68,8 @@ INTERVAL_TOL = 1e-9
 MIN_SKIP = 3
 
 #: a skip's checking cycle must land on the predicted start to this fraction of the skip's
-#: length (round-off of the products by M, and changes below the cycling tolerance; 7e-10
-#: measured on the FE blocks)
+#: length, or to the cycling tolerance (round-off of the products by M, and the changes
+#: below the cycling tolerance that the follower lets pass)
 SKIP_MATCH = 1e-6
 
 #: most cycles followed on one piece at once (a longer path is skipped in parts)
@@ -109,8 +110,6 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
       with the start that cycle leads to, x + d_{k+1}, which the next cycle run must
       reproduce.
 
-    Nothing counts that moves the state by less than the cycling tolerance ``drift_tol``.
-
     Returns
     -------
     (target, predicted) : ((2N,) array, (2N,) array or None) or None
@@ -123,14 +122,20 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
     outside[jac.S] = False
     if np.any(np.abs(increment[outside]) > 1e-3 * drift_tol):
         return None     # a change that no event of the cycle makes: drift, or not a piece
+    intervals = ModeIntervals.from_log(evo.episode_log, INTERVAL_TOL)
+    tiny = 1e-3 * drift_tol
+    # the events and mode intervals alone first (O(E) per cycle followed): most refusals
+    # happen there, before the inequalities are gathered (O(E N))
+    run = follow_piece(jac, increment, PieceConstraints.none(*jac.U.shape), intervals, tiny,
+                       max_cycles=MAX_FOLLOW)
+    if not run.reached and run.cycles < MIN_SKIP:
+        return None
     cons = piece_constraints(jac, evo.jacobian_log, evo.margin_log, evo.event_margin_log,
                              system.K, system.friction, 10 * evo.force_tol,
-                             10 * evo.solver.disp_tol, drift_tol)
+                             10 * evo.solver.disp_tol)
     if cons is None:
         return None
-    intervals = ModeIntervals.from_log(evo.episode_log, jac, INTERVAL_TOL, drift_tol)
-    run = follow_piece(jac, increment, cons, intervals, 1e-3 * drift_tol,
-                       max_cycles=MAX_FOLLOW)
+    run = follow_piece(jac, increment, cons, intervals, tiny, max_cycles=MAX_FOLLOW)
     target = x.copy()
     if not run.reached:
         if run.cycles < MIN_SKIP:
