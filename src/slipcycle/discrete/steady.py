@@ -327,8 +327,10 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     rejects_left, wait = MAX_PERIODIC_REJECTIONS, 0
     moving_prev = None     # nodes the events of the last kept cycle moved
     for c in range(cycles):
-        if accel:
-            evo.jacobian_log, evo.margin_log = [], []
+        # record what a step needs only in a cycle that may attempt one: the records cost
+        # O(N) per event and O(E N) to gather
+        attempt = accel and rejects_left > 0 and wait == 0
+        evo.jacobian_log, evo.margin_log = ([], []) if attempt else (None, None)
         totals = evo.follow(theta, vals, record=record)
         evo.resync()
         if progress is not None:
@@ -399,7 +401,7 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
                 residual = rres
                 state = "ratcheting"
                 break
-        if accel and rejects_left > 0 and wait == 0 and c + 1 < cycles and same:
+        if attempt and c + 1 < cycles and same:
             # the same nodes moved in the last two cycles: the cycle map is on one piece
             step = _periodic_target(evo, system, starts[-2], d1, vals[0], tol * xscale)
             target, predicted = step if step is not None else (None, None)
