@@ -232,6 +232,9 @@ class Evolution:
         #: with ``margin_log``: at every event, the inequalities of the nodes that keep
         #: their mode there and their rates before it, ((4, N), (4, N))
         self.event_margin_log: list = []
+        #: with ``margin_log``: the nodes that start to slip, open or close at a load
+        #: sample (:meth:`_record_switches`)
+        self.switch_log: list = []
         self._lowest = None
         self._clock = 0.0
         #: set to ``hashlib.blake2b()`` to hash the sequence of modes and events
@@ -241,7 +244,8 @@ class Evolution:
         """Recompute the reactions r = r^w + K x exactly (removes round-off drift)."""
         self.r = self.r_w + self.K @ self.x
 
-    def _record_margins(self, modes: np.ndarray, after_event: bool, theta: float) -> None:
+    def _record_margins(self, modes: np.ndarray, after_event: bool, theta: float,
+                        event_node: int = -1) -> None:
         """Add the start of a piece with ``modes`` to the records of ``margin_log``.
 
         At a load sample (which a perturbed start does not move) the values go into the
@@ -256,13 +260,49 @@ class Evolution:
             self._close_episodes(np.flatnonzero(changed),
                                  len(self.jacobian_log) if after_event else -1, theta)
         if not after_event:
+            if changed.any():
+                self._record_switches(np.flatnonzero(changed), modes)
             _margin_rows(modes, self.f, self.x, self.r, self._lowest, True)
             return
         value, rate = self._at_event
+        others = changed.copy()
+        others[event_node] = False
+        if others.any():
+            self._record_switches(np.flatnonzero(others), modes, (value, rate))
         value[:, changed] = np.inf
         self.event_margin_log.append((value, rate))
         self.margin_log.append(self._lowest)
         self._lowest = np.full((4, self.n), np.inf)
+
+    def _record_switches(self, nodes: np.ndarray, modes: np.ndarray,
+                         at_event: tuple | None = None) -> None:
+        """Record the nodes that start to slip, open or close at a load sample, or at the
+        event of another node: each sits on an inequality there (f p ± q, p or w within
+        the tolerance), and a perturbed start moves it off, to an event of its own before
+        that instant or to no switch at all (``switch_log``: interval index, inequality
+        kind as in ``margin_log``, node, value, its rate before an event (0 at a sample),
+        and the event's index, −1 at a sample). A node that stops slipping does so because
+        of the rates alone."""
+        n = self.n
+        q, p, w = self.r[:n], self.r[n:], self.x[n:]
+        interval = len(self.jacobian_log)
+        event = interval if at_event is not None else -1
+        for j in nodes:
+            new, old = modes[j], self.modes[j]
+            if new == SLIP_POS and old != SLIP_POS:
+                kind, value = 0, self.f[j] * p[j] + q[j]
+            elif new == SLIP_NEG and old != SLIP_NEG:
+                kind, value = 1, self.f[j] * p[j] - q[j]
+            elif new == SEPARATED:
+                kind, value = 2, p[j]
+            elif old == SEPARATED:
+                kind, value = 3, w[j]
+            else:
+                continue
+            rate = 0.0
+            if at_event is not None and np.isfinite(at_event[0][kind, j]):
+                rate = float(at_event[1][kind, j])
+            self.switch_log.append((interval, kind, int(j), float(value), rate, event))
 
     def _close_episodes(self, nodes: np.ndarray, event: int, theta: float) -> None:
         """End the current mode interval of ``nodes`` at ``theta`` (by ``event``, or −1)."""
@@ -304,7 +344,8 @@ class Evolution:
         while True:
             modes, xd, rd = self.solver.solve(self.x, self.r, rw, guess)
             if self._lowest is not None:
-                self._record_margins(modes, pending is not None, self._clock + t)
+                self._record_margins(modes, pending is not None, self._clock + t,
+                                     pending[1] if pending is not None else -1)
             self.modes = modes
             if pending is not None:
                 # rank-one factor I − u aᵀ of the event just passed (module docstring),
@@ -384,6 +425,7 @@ class Evolution:
             self._lowest = np.full((4, self.n), np.inf)
             self.episode_log = []
             self.event_margin_log = []
+            self.switch_log = []
             self._episode_event = np.full(self.n, -1)
             self._episode_theta = np.zeros(self.n)
             self._clock = 0.0

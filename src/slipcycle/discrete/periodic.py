@@ -44,13 +44,16 @@ to them and checks each by one more exact cycle.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
 #: how far an event may move past the end of its load segment [rad] (round-off)
 SEGMENT_TOL = 1e-12
+
+#: round-off allowance of the inequalities, in units of the solver's thresholds
+ROUND_OFF = 10.0
 
 __all__ = ["CycleJacobian", "cycle_jacobian", "PieceConstraints", "piece_constraints",
            "ModeIntervals", "PieceRun", "follow_piece"]
@@ -179,6 +182,16 @@ class PieceConstraints:
         a_iᵀ u_e: change of each inequality per unit coefficient of factor e.
     tol : (h,) array
         How far below zero an inequality may go (round-off) [N or m].
+    switch_interval, switch_value, switch_G, switch_GU, switch_tol : arrays
+        The h_s inequalities on which a node starts to slip, opens or closes at a load
+        sample or at another node's event: the interval that begins there, the recorded
+        value, gradients (h_s, m), a_iᵀ u_e (h_s, E), and the solver's threshold. Such a
+        switch needs the value to stay within [0, threshold] there (less round-off, or as
+        recorded): below, the node switches by an event of its own before; above, not at
+        all.
+    switch_rate, switch_event : arrays
+        At another node's event: the inequality's rate before it and the event's index
+        (the value is taken at the moved event); 0 and −1 at a load sample.
     """
 
     lowest: np.ndarray
@@ -187,6 +200,13 @@ class PieceConstraints:
     G: np.ndarray
     GU: np.ndarray
     tol: np.ndarray
+    switch_interval: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    switch_value: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    switch_G: np.ndarray = None
+    switch_GU: np.ndarray = None
+    switch_tol: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    switch_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    switch_event: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
     def change(self, d: np.ndarray, c: np.ndarray,
                rows: np.ndarray | slice = slice(None)) -> np.ndarray:
@@ -226,6 +246,10 @@ class PieceConstraints:
                    np.zeros((0, m)), np.zeros((0, E)), np.zeros(0))
 
     def __post_init__(self):
+        m, E = self.G.shape[1], self.GU.shape[1]
+        if self.switch_G is None:
+            object.__setattr__(self, "switch_G", np.zeros((0, m)))
+            object.__setattr__(self, "switch_GU", np.zeros((0, E)))
         low = np.min(self.lowest, axis=0, initial=np.inf) + self.tol
         at = np.min(self.at_event, axis=0, initial=np.inf) + self.tol
         object.__setattr__(self, "_slack", (low, at))
@@ -236,7 +260,7 @@ class PieceConstraints:
 
 def piece_constraints(jac: CycleJacobian, log: list, margin_log: list, event_margin_log: list,
                       K: np.ndarray, friction: np.ndarray, force_tol: float,
-                      disp_tol: float) -> PieceConstraints | None:
+                      disp_tol: float, switch_log: list = ()) -> PieceConstraints | None:
     """Collect the inequalities of one recorded cycle.
 
     Parameters
@@ -254,22 +278,50 @@ def piece_constraints(jac: CycleJacobian, log: list, margin_log: list, event_mar
     K : (2N, 2N) array
     friction : (N,) array
     force_tol, disp_tol : float
-        Round-off allowances of the force [N] and gap [m] inequalities.
+        Round-off allowances of the force [N] and gap [m] inequalities
+        (:data:`ROUND_OFF` times the solver's thresholds).
+    switch_log : list of (interval, kind, node, value)
+        ``Evolution.switch_log``: nodes that start to slip, open or close at a load
+        sample, on an inequality there.
 
     Returns
     -------
     PieceConstraints or None
         None when the log and the margins do not match.
     """
-    n = K.shape[0] // 2
     E = len(log)
     if len(margin_log) != E + 1 or len(event_margin_log) != E or jac.U.shape[0] != E:
         return None
-    S, m = jac.S, jac.S.size
+    S = jac.S
     low = np.array(margin_log)                          # (E+1, 4, N)
     at = np.array([v for v, _ in event_margin_log]).reshape(E, *low.shape[1:])
     rate = np.array([g for _, g in event_margin_log]).reshape(E, *low.shape[1:])
     kind, node = np.nonzero(np.isfinite(low).any(axis=0) | np.isfinite(at).any(axis=0))
+    G = _gradients(kind, node, S, K, friction)
+    # an inequality that neither the moving coordinates nor the events' moving change
+    # cannot fail
+    moves = np.isfinite(at[:, kind, node]) & (rate[:, kind, node] != 0.0)
+    live = np.any(G != 0.0, axis=1) | np.any(moves, axis=0)
+    G = np.ascontiguousarray(G[live])
+    tol = np.where(kind == 3, disp_tol, force_tol)[live]
+    k, j = kind[live], node[live]
+    sw = np.array(switch_log, float).reshape(-1, 6)
+    sk, sn = sw[:, 1].astype(int), sw[:, 2].astype(int)
+    Gs = _gradients(sk, sn, S, K, friction)
+    return PieceConstraints(np.ascontiguousarray(low[:, k, j]),
+                            np.ascontiguousarray(at[:, k, j]),
+                            np.nan_to_num(rate[:, k, j], posinf=0.0, neginf=0.0), G,
+                            np.ascontiguousarray(G @ jac.U.T), tol,
+                            sw[:, 0].astype(np.int64), sw[:, 3].copy(), Gs,
+                            np.ascontiguousarray(Gs @ jac.U.T),
+                            np.where(sk == 3, disp_tol, force_tol) / ROUND_OFF,
+                            sw[:, 4].copy(), sw[:, 5].astype(np.int64))
+
+
+def _gradients(kind: np.ndarray, node: np.ndarray, S: np.ndarray, K: np.ndarray,
+               friction: np.ndarray) -> np.ndarray:
+    """Gradients on S of f p + q (kind 0), f p − q (1), p (2) and w (3) of ``node``."""
+    n, m = K.shape[0] // 2, S.size
     f = np.asarray(friction, float)[node]
     Kq, Kp = K[np.ix_(node, S)], K[np.ix_(n + node, S)]
     sq = np.select([kind == 0, kind == 1], [1.0, -1.0], 0.0)
@@ -279,17 +331,7 @@ def piece_constraints(jac: CycleJacobian, log: list, margin_log: list, event_mar
     pos = np.searchsorted(S, n + node[gap])
     hit = (pos < m) & (S[np.minimum(pos, m - 1)] == n + node[gap])
     G[gap[hit], pos[hit]] = 1.0
-    # an inequality that neither the moving coordinates nor the events' moving change
-    # cannot fail
-    moves = np.isfinite(at[:, kind, node]) & (rate[:, kind, node] != 0.0)
-    live = np.any(G != 0.0, axis=1) | np.any(moves, axis=0)
-    G = np.ascontiguousarray(G[live])
-    tol = np.where(kind == 3, disp_tol, force_tol)[live]
-    k, j = kind[live], node[live]
-    return PieceConstraints(np.ascontiguousarray(low[:, k, j]),
-                            np.ascontiguousarray(at[:, k, j]),
-                            np.nan_to_num(rate[:, k, j], posinf=0.0, neginf=0.0), G,
-                            np.ascontiguousarray(G @ jac.U.T), tol)
+    return np.ascontiguousarray(G)
 
 
 @njit(cache=True)
@@ -421,14 +463,17 @@ def follow_piece(jac: CycleJacobian, r: np.ndarray, constraints: PieceConstraint
         intervals.end, intervals.length, intervals.tol, constraints.G, constraints.GU,
         constraints.lowest, constraints.at_event, constraints.event_rate, constraints.tol,
         constraints._slack[0], constraints._slack[1], constraints._norm,
-        constraints._rate_max, r[S].copy(), tiny, kmax)
+        constraints._rate_max, constraints.switch_interval, constraints.switch_value,
+        constraints.switch_G, constraints.switch_GU, constraints.switch_tol,
+        constraints.switch_rate, constraints.switch_event, r[S].copy(), tiny, kmax)
     return PieceRun(k, reached, d, d + e)
 
 
 @njit(cache=True)
 def _follow(U, A, rate, room_before, room_after, same_segment, gap, iv_start, iv_end,
             iv_length, iv_tol, G, GU, lowest, at_event, event_rate, tol, slack_low, slack_at,
-            norm, rate_max, e, tiny, kmax):
+            norm, rate_max, sw_interval, sw_value, sw_G, sw_GU, sw_tol, sw_rate, sw_event,
+            e, tiny, kmax):
     """The loop of :func:`follow_piece`; returns (k, reached, d_k, M^k r) on S.
 
     Both checks are linear in (d_k, c(d_k)). The inequalities are checked exactly only
@@ -467,11 +512,14 @@ def _follow(U, A, rate, room_before, room_after, same_segment, gap, iv_start, iv
             max_shift = max(max_shift, abs(shift[ev]))
             # an event that passes a load sample or another event changes the modes the
             # rates after it are solved with: another piece of the map
-            if (shift[ev] < -room_before[ev] - SEGMENT_TOL
-                    or shift[ev] > room_after[ev] + SEGMENT_TOL):
+            if shift[ev] > room_after[ev] + SEGMENT_TOL:
                 return k, False, d, e
-            if (ev > 0 and same_segment[ev]
-                    and shift[ev] + gap[ev] < shift[ev - 1] - SEGMENT_TOL):
+            # nor before the event before it in its segment, or the segment's start
+            if ev > 0 and same_segment[ev]:
+                moved = gap[ev] + shift[ev] - shift[ev - 1]
+            else:
+                moved = room_before[ev] + shift[ev]
+            if moved < -SEGMENT_TOL:
                 return k, False, d, e
         for t in range(iv_length.size):         # every mode interval keeps its length
             length = iv_length[t]
@@ -499,6 +547,23 @@ def _follow(U, A, rate, room_before, room_after, same_segment, gap, iv_start, iv
                 change -= GU[r, ev] * coef[ev]
                 if lowest[ev + 1, r] + change < -tol[r]:
                     return k, False, d, e
+        for r in range(sw_value.size):          # switches at load samples keep happening
+            change = 0.0
+            for i in range(m):
+                change += sw_G[r, i] * dn[i]
+            # the switch's interval begins after factor sw_interval − 1; the value before
+            # an event uses the product of the factors before it
+            last = sw_event[r] if sw_event[r] >= 0 else sw_interval[r]
+            for ev in range(last):
+                change -= sw_GU[r, ev] * coef[ev]
+            value = sw_value[r] + change
+            if sw_event[r] >= 0:
+                value += sw_rate[r] * shift[sw_event[r]]
+            # below zero the node reaches its inequality before that instant, by an
+            # event of its own (as recorded, less round-off); above the threshold it does
+            # not switch there
+            if value > sw_tol[r] or value < min(sw_value[r], 0.0) - 1e-2 * sw_tol[r]:
+                return k, False, d, e
         for i in range(m):
             d[i] = dn[i]
             e[i] = nxt[i]

@@ -33,6 +33,7 @@ from slipcycle.discrete.lcp import lemke
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.periodic import (
+    ROUND_OFF,
     ModeIntervals,
     PieceConstraints,
     cycle_jacobian,
@@ -131,8 +132,8 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
     if not run.reached and run.cycles < MIN_SKIP:
         return None
     cons = piece_constraints(jac, evo.jacobian_log, evo.margin_log, evo.event_margin_log,
-                             system.K, system.friction, 10 * evo.force_tol,
-                             10 * evo.solver.disp_tol)
+                             system.K, system.friction, ROUND_OFF * evo.force_tol,
+                             ROUND_OFF * evo.solver.disp_tol, evo.switch_log)
     if cons is None:
         return None
     run = follow_piece(jac, increment, cons, intervals, tiny, max_cycles=MAX_FOLLOW)
