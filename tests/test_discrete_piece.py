@@ -45,27 +45,33 @@ def _recorded_cycles(system, load, cycles, steps=40):
         jac = cycle_jacobian(evo.jacobian_log, system.K, system.friction)
         cons = piece_constraints(jac, evo.jacobian_log, evo.margin_log,
                                  evo.event_margin_log, system.K, system.friction,
-                                 10 * evo.force_tol, 1e-12)
+                                 10 * evo.force_tol, 1e-12, evo.switch_log)
         out.append((x0, evo.x.copy(), jac, cons, ModeIntervals.from_log(evo.episode_log, 0.0),
                     evo.signature.digest()))
     return out, F
 
 
-def test_next_cycle_on_the_same_sequence_is_predicted_exactly():
+@pytest.mark.parametrize("seed, n", [(212, 4), (5, 5)])
+def test_next_cycle_on_the_same_sequence_is_predicted_exactly(seed, n):
     """Where two successive cycles share their sequence of modes and events, the first
-    one's record predicts the second's start (to 1e-12 of the increment), the length of
-    every mode interval (to 1e-11 rad) and the smallest value of every inequality on every
-    interval (to 1e-9 of the force scale)."""
-    system, load = _random_case(212, 4, True)
+    one's record predicts the second's start (to 1e-9 of the increment, and 1e-13 of the
+    state), the length of
+    every mode interval (to 1e-11 rad), the smallest value of every inequality on every
+    interval and at every event, and the value of the inequality on which a node switches
+    at a load sample or at another node's event (seed 5: a node switches together with
+    another node's event in every cycle), to 1e-9 of the force scale."""
+    system, load = _random_case(seed, n, True)
     cycles, F = _recorded_cycles(system, load, 40)
     pairs = [(a, b) for a, b in zip(cycles, cycles[1:], strict=False) if a[5] == b[5]]
     assert pairs
+    switches = 0
     for (x0, x1, jac, cons, iv, _), (y0, y1, _, cons2, iv2, _) in pairs:
         r = x1 - x0
         c = np.empty(jac.U.shape[0])
         e = _apply_map_coefficients(jac.U, jac.A, r[jac.S].copy(), c)
         actual = (y1 - y0)[jac.S]
-        assert np.abs(e - actual).max() <= 1e-9 * np.abs(r).max()
+        # round-off of the cycle itself: 1e-13 of the state
+        assert np.abs(e - actual).max() <= 1e-9 * np.abs(r).max() + 1e-13 * np.abs(x1).max()
         shift = np.concatenate([jac.event_shift(c), [0.0]])
         predicted = iv.length + shift[iv.end] - shift[iv.start]
         np.testing.assert_allclose(predicted, iv2.length, rtol=0, atol=1e-11)
@@ -77,6 +83,17 @@ def test_next_cycle_on_the_same_sequence_is_predicted_exactly():
         at = cons.at_event + cons.event_rate * shift[:-1, None] + change[:-1]
         finite = np.isfinite(cons2.at_event)
         np.testing.assert_allclose(at[finite], cons2.at_event[finite], rtol=0, atol=1e-9 * F)
+        assert cons.switch_value.size == cons2.switch_value.size
+        for i, (k, ev) in enumerate(zip(cons.switch_interval, cons.switch_event,
+                                        strict=True)):
+            last = ev if ev >= 0 else k
+            value = (cons.switch_value[i] + cons.switch_G[i] @ r[jac.S]
+                     - cons.switch_GU[i, :last] @ c[:last])
+            if ev >= 0:
+                value += cons.switch_rate[i] * shift[ev]
+            assert value == pytest.approx(cons2.switch_value[i], abs=1e-9 * F)
+        switches += cons.switch_value.size
+    assert switches > 0 or seed != 5
 
 
 def test_mode_intervals_refuse_a_slip_that_would_shrink_below_nothing():
