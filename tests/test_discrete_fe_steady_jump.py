@@ -25,7 +25,7 @@ PLAIN_D_101 = 1.422803542687334e-07
 
 def test_fe_block_101_step_reaches_the_dissipation_of_tightly_converged_plain_cycling():
     """101 contact nodes, slide-first: plain cycling needs 377 cycles to 1e-8 and still
-    differs from its limit by 3e-4 in D. The accelerated run (tolerance 1e-10, 156 cycles:
+    differs from its limit by 3e-4 in D. The accelerated run (tolerance 1e-10, 171 cycles:
     creeping nodes stop one after another, and each stop changes the piece of the cycle
     map, which the steps must not jump over) ends on plain cycling's limit (measured once:
     the state within 1.3e-9 of the plain run to 1e-13, 1523 cycles) and matches its D to

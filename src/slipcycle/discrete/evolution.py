@@ -223,7 +223,7 @@ class Evolution:
         #: while slipping, w ≥ 0 while open, +inf where one does not apply (:meth:`follow`
         #: adds the last interval; :func:`~slipcycle.discrete.periodic.piece_constraints`)
         self.margin_log: list | None = None
-        #: with ``margin_log``: every node's maximal intervals of one mode that begin or
+        #: with ``jacobian_log``: every node's maximal intervals of one mode that begin or
         #: end at an event, as (node, first event, start θ, last event, end θ) with event
         #: indices into ``jacobian_log`` (−1: a load sample or the end of the path, which
         #: do not move) — a perturbed start moves the events, and an interval whose length
@@ -236,6 +236,7 @@ class Evolution:
         #: sample (:meth:`_record_switches`)
         self.switch_log: list = []
         self._lowest = None
+        self._tracking = False
         self._clock = 0.0
         #: set to ``hashlib.blake2b()`` to hash the sequence of modes and events
         self.signature = None
@@ -259,6 +260,8 @@ class Evolution:
         if changed.any():
             self._close_episodes(np.flatnonzero(changed),
                                  len(self.jacobian_log) if after_event else -1, theta)
+        if self._lowest is None:            # mode intervals only
+            return
         if not after_event:
             if changed.any():
                 self._record_switches(np.flatnonzero(changed), modes)
@@ -343,7 +346,7 @@ class Evolution:
         pending = None
         while True:
             modes, xd, rd = self.solver.solve(self.x, self.r, rw, guess)
-            if self._lowest is not None:
+            if self._tracking:
                 self._record_margins(modes, pending is not None, self._clock + t,
                                      pending[1] if pending is not None else -1)
             self.modes = modes
@@ -421,14 +424,17 @@ class Evolution:
         PathTotals
         """
         totals = totals or PathTotals.zeros(self.n)
-        if self.margin_log is not None:
-            self._lowest = np.full((4, self.n), np.inf)
+        # mode intervals with the Jacobian, inequalities with ``margin_log`` as well
+        self._tracking = self.jacobian_log is not None
+        if self._tracking:
             self.episode_log = []
-            self.event_margin_log = []
-            self.switch_log = []
             self._episode_event = np.full(self.n, -1)
             self._episode_theta = np.zeros(self.n)
             self._clock = 0.0
+        if self._tracking and self.margin_log is not None:
+            self._lowest = np.full((4, self.n), np.inf)
+            self.event_margin_log = []
+            self.switch_log = []
         if record:
             xs = np.empty((len(theta), 2 * self.n))
             rs = np.empty((len(theta), 2 * self.n))
@@ -441,7 +447,9 @@ class Evolution:
         if self._lowest is not None:
             self.margin_log.append(self._lowest)
             self._lowest = None
+        if self._tracking:
             self._close_episodes(np.arange(self.n), -1, self._clock)
+            self._tracking = False
         if record:
             totals.samples = {"x": xs, "r": rs, "modes": ms}
         return totals

@@ -76,6 +76,10 @@ SKIP_MATCH = 1e-6
 #: most cycles followed on one piece at once (a longer path is skipped in parts)
 MAX_FOLLOW = 1000
 
+#: what :func:`_periodic_target` answers when a step looks possible on the events and
+#: mode intervals of a cycle recorded without its inequalities
+RECORD = "record the inequalities"
+
 #: a steady state reached with steps is polished by one more step down to this fraction
 #: of the steady-state tolerance
 POLISH = 1e-3
@@ -111,10 +115,15 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
       with the start that cycle leads to, x + d_{k+1}, which the next cycle run must
       reproduce.
 
+    The inequalities cost O(N) per event to record and O(E N) to gather, so a cycle
+    records the events and mode intervals only, and the inequalities only when the cycle
+    before found a step possible on those alone.
+
     Returns
     -------
-    (target, predicted) : ((2N,) array, (2N,) array or None) or None
-        ``predicted`` is None for a periodic state.
+    (target, predicted) : ((2N,) array, (2N,) array or None), :data:`RECORD` or None
+        ``predicted`` is None for a periodic state; :data:`RECORD` asks for the
+        inequalities in the next cycle.
     """
     jac = cycle_jacobian(evo.jacobian_log, system.K, system.friction)
     if jac is None or jac.rate is None:
@@ -131,6 +140,8 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
                        max_cycles=MAX_FOLLOW)
     if not run.reached and run.cycles < MIN_SKIP:
         return None
+    if evo.margin_log is None:
+        return RECORD          # worth a look: record the inequalities in the next cycle
     cons = piece_constraints(jac, evo.jacobian_log, evo.margin_log, evo.event_margin_log,
                              system.K, system.friction, ROUND_OFF * evo.force_tol,
                              ROUND_OFF * evo.solver.disp_tol, evo.switch_log)
@@ -327,11 +338,13 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     saved = None           # what to restore if the cycle checking a periodic step fails
     rejects_left, wait = MAX_PERIODIC_REJECTIONS, 0
     moving_prev = None     # nodes the events of the last kept cycle moved
+    inequalities = False   # record the inequalities too (the last attempt asked for them)
     for c in range(cycles):
-        # record what a step needs only in a cycle that may attempt one: the records cost
-        # O(N) per event and O(E N) to gather
+        # record what a step needs only in a cycle that may attempt one
         attempt = accel and rejects_left > 0 and wait == 0
-        evo.jacobian_log, evo.margin_log = ([], []) if attempt else (None, None)
+        evo.jacobian_log = [] if attempt else None
+        evo.margin_log = [] if attempt and inequalities else None
+        inequalities = False
         totals = evo.follow(theta, vals, record=record)
         evo.resync()
         if progress is not None:
@@ -405,7 +418,8 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         if attempt and c + 1 < cycles and same:
             # the same nodes moved in the last two cycles: the cycle map is on one piece
             step = _periodic_target(evo, system, starts[-2], d1, vals[0], tol * xscale)
-            target, predicted = step if step is not None else (None, None)
+            inequalities = step is RECORD
+            target, predicted = (None, None) if step is None or step is RECORD else step
             if target is None and residual <= tol:
                 state = "steady"
                 break
