@@ -208,36 +208,16 @@ class PieceConstraints:
     switch_rate: np.ndarray = field(default_factory=lambda: np.zeros(0))
     switch_event: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
 
-    def change(self, d: np.ndarray, c: np.ndarray,
-               rows: np.ndarray | slice = slice(None)) -> np.ndarray:
-        """(E+1, h_rows) change of the inequalities ``rows`` on each interval for a start
-        moved by d (m,) whose factor coefficients are c (E,):
-        a_iᵀ M_s d = a_iᵀ d − Σ_{e ≤ s} a_iᵀu_e c_e."""
-        base = self.G[rows] @ d
+    def change(self, d: np.ndarray, c: np.ndarray) -> np.ndarray:
+        """(E+1, h) change of the inequalities on each interval for a start moved by d
+        (m,) whose factor coefficients are c (E,): a_iᵀ M_s d = a_iᵀ d − Σ_{e ≤ s} a_iᵀu_e c_e
+        (what the compiled follower evaluates for the inequalities that could fail)."""
+        base = self.G @ d
         out = np.empty((c.size + 1, base.size))
         out[0] = base
-        np.cumsum(self.GU[rows].T * c[:, None], axis=0, out=out[1:])
+        np.cumsum(self.GU.T * c[:, None], axis=0, out=out[1:])
         out[1:] = base - out[1:]
         return out
-
-    def hold(self, change: np.ndarray, shift: np.ndarray,
-             rows: np.ndarray | slice = slice(None)) -> bool:
-        """Whether the inequalities ``rows`` hold with the given change (E+1, h_rows) and
-        the events moved by ``shift`` (E,) [rad]."""
-        tol = self.tol[rows]
-        if np.any(self.lowest[:, rows] + change < -tol):
-            return False
-        at = self.at_event[:, rows] + self.event_rate[:, rows] * shift[:, None] + change[:-1]
-        return not np.any(at < -tol)
-
-    def at_risk(self, reach: float, max_shift: float) -> np.ndarray:
-        """Indices of the inequalities that a state change of at most ``reach`` [m] (on
-        every interval) and events moved by at most ``max_shift`` [rad] could make fail:
-        |a_iᵀ M_s d| ≤ ‖a_i‖₁ max_s |M_s d|∞."""
-        slack = self._slack
-        risk = (self._norm * reach >= slack[0]) | (
-            self._norm * reach + self._rate_max * max_shift >= slack[1])
-        return np.flatnonzero(risk)
 
     @classmethod
     def none(cls, E: int, m: int) -> PieceConstraints:
