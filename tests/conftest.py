@@ -134,3 +134,17 @@ def slid_block(elements: int):
     protocol = np.array([np.concatenate(r.combine(normal=a, tangential=t))
                          for a, t in ((0.2e-6, 0.0), (0.2e-6, 3e-6), (2e-6, 3e-6))])
     return system, load, protocol
+
+
+def assert_same_steady_state(fast, plain, rel: float = 1e-6):
+    """The accelerated run ends where plain cycling does: the same class and permanently
+    stuck nodes, and D and D per node within ``rel`` of max(|D|, force × displacement
+    scale) of plain cycling's."""
+    import numpy as np
+
+    assert fast.steady_state == plain.steady_state
+    scale = max(abs(plain.dissipation_per_cycle), plain.force_scale * plain.disp_scale)
+    assert abs(fast.dissipation_per_cycle - plain.dissipation_per_cycle) <= rel * scale
+    np.testing.assert_allclose(fast.dissipation_per_node, plain.dissipation_per_node,
+                               rtol=0, atol=rel * scale)
+    assert fast.permanently_stuck_nodes == plain.permanently_stuck_nodes
