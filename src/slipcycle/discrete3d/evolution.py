@@ -486,11 +486,19 @@ class Evolution3D:
         r = h2.r.copy()
         add_rows(self.solver.K, U, dx[U], r)
         # return to the admissible set: a step with no load increment from the
-        # extrapolated state (an O(h⁴) correction) makes the cone and contact exact again
+        # extrapolated state (an O(h⁴) correction) makes the cone and contact exact again.
+        # A node the correction leaves inside its cone (a slip ending within O(h²) of the
+        # step's end) sticks there: keeping the step for all nodes, instead of falling
+        # back to the half steps, keeps the path map continuous (a fall-back switched the
+        # extrapolation off for every node at once, a jump of the size of the error
+        # estimate that Anderson mixing of the cycle starts could not get past)
         proj = self.solver.solve(x, r, np.zeros_like(r))
-        if proj is None or not np.array_equal(proj.modes, h2.modes):
+        if proj is None:
             return h2
-        return Step(proj.x, proj.r, proj.modes, h2.drw, h2.iterations + proj.iterations)
+        # such a node slipped in the step: it is booked as slipping (slip length, state)
+        modes = np.where((proj.modes == STICK) & (h2.modes == SLIP), SLIP, proj.modes)
+        return Step(proj.x, proj.r, modes.astype(proj.modes.dtype), h2.drw,
+                    h2.iterations + proj.iterations)
 
     def _solve(self, x, r, drw, guess=None):
         return self.solver.solve(x, r, drw, guess)

@@ -13,52 +13,65 @@ Acceleration. Near a periodic state the start-of-cycle states x_c of plain cycli
 approach their limit geometrically (a contraction of the cycle map P, x_{c+1} = P(x_c),
 whose linearisation about the periodic state has spectral radius < 1); with weak
 damping of the slip pattern the ratio is close to 1 and tol is reached only after many
-cycles. Once the cycles' pattern (the set of nodes that slip, the set that separate, the
-rest stuck) repeats, the limit is extrapolated from the last states by reduced rank
+cycles (on the 2000-node benchmark chain, 0.987 per cycle: the nodes at the edge of the
+slip zones, whose slip per cycle is small, creep toward their limit). Once the cycles'
+pattern (the set of nodes that slip, the set that separate, the rest stuck) repeats and
+its changes shrink by a steady ratio, the limit is extrapolated by reduced rank
 extrapolation (Eddy 1979; Mešina 1977; Sidi, Ford & Smith, SIAM J. Numer. Anal. 1986):
 the combination x* = Σ γ_i x_{i+1}, Σ γ_i = 1, that minimises |Σ γ_i (x_{i+1} − x_i)|,
 exact for a linear map with k+1 differences when the error lies in k eigen-directions.
-The steady state is a set (the stuck nodes' slips are any values their cones admit,
-Barber 2012), and the member plain cycling reaches is selected by the history; the
-extrapolation keeps it: a node stuck in every cycle of the sequence has exactly the same
-slip in all its states, hence the same in x*, and only the components that plain cycling
-moves are moved. The jump is tried only in the geometric regime (the last changes
-shrink by ratios agreeing within 10 %). x* is then validated by plain cycles from it:
-it is accepted only through the ordinary test — a cycle reproduces its start within
-``tol`` — and the jump is undone (cycling resumes from the state before it) if the next
-cycle's change is not smaller than the last plain change, if in it a node slips or opens
-that was stuck and closed in every cycle of the sequence (its memory would change), or
-if plain cycling after it stalls (the largest change of 4 cycles above 0.8 × that of the
-4 before; acceleration then ends). The accepted state is therefore a fixed point of the
-cycle map to the same tolerance as plain cycling's, in the same member of the set.
+From then on every cycle of the run jumps: the pairs (x_i, P(x_i)) of its cycles, the
+jumped ones included, are combined by Anderson mixing (Anderson, J. ACM 1965; Walker &
+Ni, SIAM J. Numer. Anal. 2011; equivalent to GMRES on a linear map), x* = Σ α_i P(x_i)
+with Σ α_i = 1 minimising |Σ α_i (P(x_i) − x_i)|, over the last ``ANDERSON_WINDOW``
+pairs. The steady state is a set (the stuck nodes' slips are any values their cones
+admit, Barber 2012), and the member plain cycling reaches is selected by the history;
+the mixing keeps it: a node stuck in every cycle of the run has exactly the same slip in
+all its states, hence the same in x*, and only the components that the cycles move are
+moved. Mixing is not monotone; the jumps fail, and cycling resumes from the end of the
+best cycle of the run, if a node stuck and closed in every cycle of the run slips or
+opens (its memory would change), or if the change of a cycle rises above
+``ANDERSON_GROWTH`` times the best one or does not improve on it for
+``ANDERSON_PATIENCE`` jumps (twice the mixing goes on with the failed pair among its
+secants, then a longer plain run is required; three failures end the jumps). After the
+jumps, plain cycling must keep converging: if it stalls (the largest change of 4 cycles
+above 0.8 × that of the 4 before) the state before the first jump is restored and
+acceleration ends. A state is accepted only through the ordinary test — a cycle
+reproduces its start within ``tol`` — so it is a fixed point of the cycle map to the
+same tolerance as plain cycling's, in the same member of the set.
 
 The cycle map is that of the discretised evolution, whose step control makes it only
 piecewise smooth: its refinement decisions change the state by up to about ``step_tol``
 × the displacement scale, and below that level plain cycling can settle on a small
 periodic orbit (seen with period 4, of amplitude 0.2–0.4 ``step_tol``) instead of a
-fixed point, and a ``tol`` well below ``step_tol`` may not be reached.
+fixed point, and the mixing, which needs one smooth map, stalls: a ``tol`` well below
+``step_tol`` may not be reached.
 
 Frozen subdivision (``replay``). To make the cycle map one fixed function, once the
-pattern repeats (the condition of the acceleration: the same slipping / separated / stuck
-nodes in two successive cycles) the subdivision of the load intervals that the step
-control chose in the last cycle is frozen and replayed in the following cycles
+pattern repeats (the same slipping / separated / stuck nodes in two successive cycles)
+the subdivision of the load intervals that the step control chose in the last cycle is
+frozen and replayed in the following cycles
 (:class:`~slipcycle.discrete3d.evolution.Evolution3D`, ``plan``): the same sub-steps,
-kept as the adaptive method kept them, without the rejected coarser steps and the error
-estimates. The replayed map is smooth where the adaptive one has jumps, so plain cycling
-and the extrapolation converge to its fixed point; each cycle is cheaper. Every
-``replay_check``-th replayed cycle the error estimates are computed as well, and a
-sub-step whose end states differ from the recorded ones has its estimate checked too; one
-whose estimate fails is redone adaptively, and the subdivision that cycle ended with is
-frozen instead. The replayed map equals the adaptive one only where the step control would take
-the same decisions, so a fixed point of the replayed map is accepted only after one
-adaptive cycle from it reproduces its start within ``tol``; otherwise cycling continues
-adaptively (and the subdivision of that cycle may be frozen in turn, at most
-``replay_max`` times). The result is therefore a steady state of the adaptive method
-within ``tol``, as without replay. Replay is off by default: measured on the FE-like
-benchmark chain (1000 and 2000 nodes, ``step_tol`` 1e-4, ``tol`` 1e-6) it removes about
-a third of the step solves but the run still does not reach ``tol`` in 50 cycles, and
-with the extrapolation near a shakedown it can time a jump so that dying slips stop
-elsewhere (another member of the set of steady states).
+kept as the adaptive method kept them (with or without the extrapolation), without the
+rejected coarser steps and the error estimates. The replayed map is smooth where the
+adaptive one has jumps, so plain cycling and the mixing converge to its fixed point;
+each cycle is cheaper. Outside the jumps every ``replay_check``-th replayed cycle
+computes the error estimates as well; in every cycle a sub-step whose end states differ
+from the recorded ones has its estimate checked too, and one whose estimate fails is
+redone adaptively (outside the jumps the subdivision that cycle ended with is then frozen
+instead, at most ``replay_max`` times; during the jumps the map stays the replay of one
+subdivision). A fixed point of the replayed map is accepted only after a verifying
+replay from it with every sub-step's error estimate checked fits the subdivision (no
+sub-step redone) and reproduces its start within ``tol``; otherwise the corrected
+subdivision is frozen and cycling goes on. The result is therefore a periodic state of a
+discretisation every step of which passes the step control's error test, within ``tol``:
+the adaptive method itself, which may take coarser steps where the test allows, moves it
+by the step control's error level (about ``step_tol`` × the displacement scale; 3e-5 at
+``step_tol`` 1e-5 on a 60-node chain, tested), and the two dissipate the same energy to
+that level. Replay is off by default: near a shakedown (the slip of some nodes dying
+out) the slightly different sequence of the replayed map can time a jump so that those
+nodes stop elsewhere, another member of the set of steady states than plain cycling
+reaches.
 """
 
 from __future__ import annotations
@@ -79,6 +92,12 @@ __all__ = ["SteadyResult3D", "simulate3d", "initial_state_3d", "InadmissibleInit
            "STEADY_CLASSES"]
 
 STEADY_CLASSES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged")
+
+#: Anderson mixing of the cycle starts: secant pairs used, largest rise of the residual
+#: over the best one of the run, and jumps allowed without improving on it
+ANDERSON_WINDOW = 16
+ANDERSON_GROWTH = 10.0
+ANDERSON_PATIENCE = 8
 
 
 class InadmissibleInitialState3D(InadmissibleInitialState):
@@ -235,19 +254,21 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
         Richardson extrapolation of smooth doubled steps.
     accelerate : bool
         Extrapolate the start-of-cycle state to the limit of plain cycling once the
-        pattern of slipping / separated / stuck nodes repeats, validated by the next
-        cycle (module docstring); False: plain cycling.
+        pattern of slipping / separated / stuck nodes repeats, then mix every following
+        cycle of the pattern (Anderson), each validated by the next cycle (module
+        docstring); False: plain cycling.
     accel_order : int
-        Number k of differences (beyond one) the extrapolation combines; it is applied
-        after k + 1 cycles with the same pattern.
+        Number k of differences (beyond one) the first extrapolation combines; it is
+        applied after k + 1 cycles with the same pattern.
     replay : bool
         With ``adaptive``: freeze the step control's subdivision once the pattern
-        repeats and replay it, verifying the result with an adaptive cycle (module
-        docstring); False (default): every cycle adaptive. Off by default: with
-        ``accelerate`` near a shakedown (the slip of some nodes dying out) the slightly
-        different sequence of the replayed map can time the extrapolation so that those
-        nodes stop elsewhere, another member of the set of steady states than plain
-        cycling reaches.
+        repeats and replay it; the result is a periodic state of a subdivision whose
+        every step passes the error test (module docstring). False (default): every
+        cycle adaptive. Recommended for large systems with ``tol`` below ``step_tol``,
+        where the adaptive map's switching decisions stall the mixing; off by default
+        because near a shakedown (the slip of some nodes dying out) the replayed map can
+        time a jump so that those nodes stop elsewhere, another member of the set of
+        steady states than plain cycling reaches.
     replay_check : int
         Every this many replayed cycles the error estimates are checked as well.
     replay_max : int
@@ -280,30 +301,35 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     state, residual, totals = "not_converged", np.inf, None
     ratchet = np.zeros(2 * n)
     unresolved = 0
-    # acceleration: ``seq`` the start states of the current run of plain cycles with one
-    # pattern (seq[i+1] = P(seq[i])), ``pattern`` that pattern, ``pending`` the state
-    # before an unvalidated jump and the last plain change
-    seq, pattern, pending = [evo.x.copy()], None, None
+    # acceleration: ``pairs`` the (start, end) states (x_i, P(x_i)) of the cycles of the
+    # current run with one pattern, ``run_jumps`` the jumps made in it, ``pattern`` that
+    # pattern; ``best`` (end state, residual, cycles since) the best cycle since the
+    # run's first jump, the state cycling resumes from if the jumps fail
+    pairs, pattern, run_jumps, best = [], None, 0, None
     jumps = undone = 0
     plain_from = 0          # starts[plain_from:] are successive plain cycles
     res_prev = np.inf
     probation = None        # (state before the last jump, residuals since it)
     # frozen subdivision: ``replaying`` the cycles run on evo.plan since it was frozen,
-    # ``verify`` the next cycle is the adaptive check of a replayed fixed point
+    # ``verify`` the next cycle is the checked replay of a replayed fixed point
     replay = replay and adaptive
     replaying, verify, freezes, replayed, mismatches = 0, False, 0, 0, 0
 
     def switch_map():
         # the cycle map changes (frozen ↔ adaptive): the extrapolation's sequence and the
         # ratcheting test restart with cycles of the new map
-        nonlocal seq, pattern, plain_from, res_prev
-        seq, pattern, plain_from, res_prev = [evo.x.copy()], None, len(starts) - 1, np.inf
+        nonlocal pairs, pattern, plain_from, res_prev, run_jumps, best
+        pairs, pattern, plain_from, res_prev, run_jumps, best = [], None, \
+            len(starts) - 1, np.inf, 0, None
 
     for c in range(cycles):
         was_replay, was_verify = evo.plan is not None, verify
         verify = False
         if was_replay:
-            evo.check_plan = replaying % max(replay_check, 1) == replay_check - 1
+            # the error estimates are checked in the verifying cycle, and every
+            # ``replay_check``-th cycle outside the jumps (which need one fixed map)
+            evo.check_plan = was_verify or (best is None and replaying % max(
+                replay_check, 1) == replay_check - 1)
         totals = evo.follow(theta, vals, record=record)
         evo.resync()
         unresolved += totals.unresolved
@@ -325,40 +351,58 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
         cyc_tol = max(100 * tol, 1e-9) * xscale
         pat = np.concatenate([totals.slip_length > cyc_tol, totals.separated])
         stalled = False
-        if probation is not None and residual > tol:
+        if probation is not None and residual > tol and best is None:
             hist = probation[1]
             hist.append(residual)
-            # after a jump plain cycling must keep converging: over the last 4 cycles the
-            # largest change at most 0.8 × that of the 4 before (a ratio ≤ 0.94 per
+            # after the jumps plain cycling must keep converging: over the last 4 cycles
+            # the largest change at most 0.8 × that of the 4 before (a ratio ≤ 0.94 per
             # cycle); a stall (e.g. a small periodic orbit of the discretised cycle map
-            # near the jumped state) undoes the jump and ends the acceleration
+            # near the jumped state) undoes the jumps and ends the acceleration
             stalled = len(hist) >= 8 and max(hist[-4:]) > 0.8 * max(hist[-8:-4])
-        if pending is not None or stalled:
-            if pending is not None:
-                x_before, res_before, pat_before = pending
+        failed = stalled
+        memory = False
+        if best is not None and residual > tol:
+            # a jumped cycle: Anderson mixing is not monotone, so the residual may rise
+            # for a while; the jumps fail if a node stuck and closed in every cycle of the
+            # run slipped or opened (its memory would change: another member of the
+            # steady set), or if the residual rose above GROWTH × the best one, or did
+            # not improve on it for PATIENCE jumps. (A node whose slip per cycle was
+            # dying out may stop: plain cycling does the same in the limit.)
+            if residual < best[1]:
+                best = (starts[-1].copy(), residual, 0)
             else:
-                x_before, res_before, pat_before = probation[0], -np.inf, pattern
-                accelerate = False
-            pending = None
-            if stalled or residual > tol and (residual >= res_before
-                                              or np.any(pat & ~pat_before)):
-                # the jump did not bring the state closer to a periodic one, or a node
-                # stuck and closed in every cycle of the sequence slipped or opened (its
-                # memory would change: another member of the steady set): undo it and
-                # resume plain cycling from the state before it. (A node whose slip per
-                # cycle was dying out may stop: plain cycling does the same in the limit.)
-                undone += 1
-                probation = None
-                evo.x = x_before.copy()
-                evo.resync()
-                starts[-1] = evo.x.copy()
-                seq, pattern, plain_from, res_prev = [evo.x.copy()], None, len(starts) - 1, \
-                    np.inf
-                continue
-        if was_replay and totals.replay_mismatches:
+                best = (best[0], best[1], best[2] + 1)
+            memory = bool(np.any(pat & ~pattern))
+            failed = (memory or residual > ANDERSON_GROWTH * best[1]
+                      or best[2] > ANDERSON_PATIENCE)
+        if failed and not (memory or stalled) and undone < 2:
+            # the jump overshot (the map is not linear at its scale): go on from the end of
+            # the best cycle with the secants gathered so far, this one's included
+            undone += 1
+            pairs.append((starts[-2], starts[-1]))
+            evo.x = best[0].copy()
+            evo.resync()
+            starts[-1] = evo.x.copy()
+            best = (best[0], best[1], 0)
+            continue
+        if failed:
+            # resume plain cycling from the end of the best cycle (before the first jump
+            # if cycling stalled after them)
+            undone += 1
+            evo.x = (probation[0] if stalled else best[0]).copy()
+            accelerate = accelerate and not stalled
+            probation = best = None
+            evo.resync()
+            starts[-1] = evo.x.copy()
+            pairs, pattern, plain_from, res_prev, run_jumps = [], None, \
+                len(starts) - 1, np.inf, 0
+            continue
+        if was_replay and totals.replay_mismatches and (best is None or was_verify):
             # the frozen subdivision no longer fits the path: freeze the subdivision this
             # cycle ended with (the misfitting steps redone adaptively), or return to
-            # adaptive cycles once ``replay_max`` subdivisions have been frozen
+            # adaptive cycles once ``replay_max`` subdivisions have been frozen. (During
+            # the jumps the map stays the replay of the one subdivision, whose misfitting
+            # steps are redone adaptively in each cycle.)
             evo.plan, replaying = (totals.plan if freezes < replay_max else None), 0
             freezes += evo.plan is not None
             switch_map()
@@ -367,20 +411,13 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
             res_prev = residual
             continue
         if residual <= tol:
-            if not was_replay:
+            if not was_replay or was_verify:
                 state = "steady"
                 break
-            # a fixed point of the replayed map: accepted only if an adaptive cycle from
-            # it reproduces it within tol
-            evo.plan, replaying, verify = None, 0, True
-            switch_map()
-            continue
-        if was_verify and freezes < replay_max and pending is None:
-            # the adaptive cycle from the replayed fixed point took other decisions:
-            # freeze its subdivision and replay that one
-            evo.plan, replaying = totals.plan, 0
-            freezes += 1
-            switch_map()
+            # a fixed point of the replayed map: accepted only if a replay from it with
+            # every sub-step's error estimate checked fits the subdivision and
+            # reproduces it within tol
+            verify = True
             continue
         if len(starts) - plain_from >= 3:
             d0 = starts[-2] - starts[-3]
@@ -393,10 +430,10 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                 state = "ratcheting"
                 break
         if pattern is None or not np.array_equal(pat, pattern):
-            seq, pattern = [starts[-2], starts[-1]], pat
+            pairs, pattern, run_jumps, best = [(starts[-2], starts[-1])], pat, 0, None
         else:
-            seq.append(starts[-1])
-            if (replay and evo.plan is None and freezes < replay_max and pending is None
+            pairs.append((starts[-2], starts[-1]))
+            if (replay and evo.plan is None and freezes < replay_max and best is None
                     and not was_verify):
                 # the pattern repeats: freeze this cycle's subdivision (the replayed map
                 # equals the adaptive one at the states so far, which the extrapolation
@@ -405,23 +442,34 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                 freezes += 1
         shrinking = residual < res_prev
         res_prev = residual
-        # the extrapolation is tried in the geometric regime only (the last changes
-        # shrink by a steady ratio); after a jump that had to be undone, a longer run of
-        # the pattern is required, and after three no more jumps are tried
-        if (accelerate and shrinking and c + 2 < cycles and undone < 3
-                and len(seq) >= accel_order + 2 + 3 * undone
-                and _geometric(np.array(seq[-(accel_order + 2):]))):
-            x_star = _rre(np.array(seq[-(accel_order + 2):]))
+        # the first jump of a run is tried in the geometric regime only (the changes of its
+        # plain cycles shrink by a steady ratio); after jumps that had to be undone, a
+        # longer run of the pattern is required, and after three no more jumps are tried.
+        # Then every cycle of the run jumps, with the secants of the jumped cycles
+        # (Anderson mixing), until the run ends or the jumps fail
+        window = accel_order + 1
+        if run_jumps:
+            ready = True
+        else:
+            ready = (shrinking and len(pairs) >= window + 3 * undone
+                     and _geometric(np.array([pairs[-window][0]]
+                                             + [end for _, end in pairs[-window:]])))
+        if accelerate and c + 2 < cycles and undone < 3 and ready:
+            m = window if not run_jumps else ANDERSON_WINDOW
+            X = np.array([start for start, _ in pairs[-m:]])
+            x_star = _anderson(X, np.array([end for _, end in pairs[-m:]]))
             if x_star is not None and np.all(np.isfinite(x_star)):
-                pending = (starts[-1].copy(), residual, pattern)
-                probation = (starts[-1].copy(), [])
+                if best is None:
+                    best = (starts[-1].copy(), residual, 0)
+                if probation is None:
+                    probation = (starts[-1].copy(), [])
                 jumps += 1
+                run_jumps += 1
                 x_star[2 * n:] = np.maximum(x_star[2 * n:], 0.0)   # separations ≥ 0
                 evo.x = x_star
                 evo.resync()
                 starts[-1] = x_star.copy()
-                seq, pattern, plain_from, res_prev = [x_star.copy()], None, \
-                    len(starts) - 1, np.inf
+                plain_from = len(starts) - 1
     slip_tol = max(100 * tol, 1e-9) * max(disp_scale, float(np.max(np.abs(starts[-1]))))
     slipping = np.flatnonzero(totals.slip_length > slip_tol)
     separating = np.flatnonzero(totals.separated)
@@ -465,40 +513,49 @@ def _geometric(states: np.ndarray, spread: float = 1.1) -> bool:
     return bool(ratios.max() < 1.0 and ratios.max() <= spread * ratios.min())
 
 
-def _rre(states: np.ndarray, max_gain: float = 200.0) -> np.ndarray | None:
-    """Reduced rank extrapolation of a fixed-point sequence.
+def _rre(states: np.ndarray, max_gain: float = 1e4) -> np.ndarray | None:
+    """Reduced rank extrapolation of a plain fixed-point sequence x_0 … x_{k+1} ((k + 2,
+    M)): :func:`_anderson` of the pairs (x_i, x_{i+1})."""
+    return _anderson(states[:-1], states[1:], max_gain)
+
+
+def _anderson(X: np.ndarray, F: np.ndarray, max_gain: float = 1e4) -> np.ndarray | None:
+    """Anderson (reduced rank) extrapolation of a fixed point of P from secant pairs.
 
     Parameters
     ----------
-    states : (k + 2, M) array
-        Successive iterates x_0 … x_{k+1} of x_{i+1} = P(x_i).
+    X, F : (k + 1, M) arrays
+        Cycle starts x_i and their images F_i = P(x_i). For a plain sequence
+        (x_{i+1} = F_i) this is reduced rank extrapolation (Sidi, Ford & Smith, SIAM J.
+        Numer. Anal. 23, 1986); with jumped starts it is Anderson mixing (Anderson, J. ACM
+        12, 1965; Walker & Ni, SIAM J. Numer. Anal. 49, 2011), equivalent to GMRES on a
+        linear map.
     max_gain : float
-        The jump from x_{k+1} may be at most this many times the last change (a ratio
-        of the sequence up to 1 − 1/max_gain); larger ones are refused.
+        The jump from F_k may be at most this many times the last change |F_k − x_k|
+        (a ratio of the sequence up to 1 − 1/max_gain); larger ones are refused.
 
     Returns
     -------
     (M,) array or None
-        x* = Σ γ_i x_{i+1} with Σ γ_i = 1 minimising |Σ γ_i u_i|, u_i = x_{i+1} − x_i
-        (Sidi, Ford & Smith, SIAM J. Numer. Anal. 23, 1986); components that did not
-        change along the sequence are returned unchanged. None if the problem is
-        degenerate or the jump is implausibly large.
+        x* = Σ α_i F_i with Σ α_i = 1 minimising |Σ α_i (F_i − x_i)|; components that
+        no pair moves are returned unchanged (a node stuck in every cycle keeps its
+        slip). None if the problem is degenerate or the jump is implausibly large.
     """
-    U = np.diff(states, axis=0)                    # (k+1, M)
-    moving = np.flatnonzero(np.any(U != 0.0, axis=0))
+    U = F - X                                      # (k+1, M) residuals
+    moving = np.flatnonzero(np.any(U != 0.0, axis=0) | np.any(X != X[-1], axis=0))
     last = float(np.max(np.abs(U[-1]))) if moving.size else 0.0
     if last == 0.0:
         return None
     Um = U[:, moving] / last
-    # γ_k = 1 − Σ_{i<k} γ_i: min |u_k + Σ_{i<k} γ_i (u_i − u_k)|, a least-squares problem
-    # solved by the SVD (minimum norm where the changes are linearly dependent)
+    # α_k = 1 − Σ_{i<k} α_i: min |u_k + Σ_{i<k} α_i (u_i − u_k)|, a least-squares problem
+    # solved by the SVD (minimum norm where the residuals are linearly dependent)
     W = (Um[:-1] - Um[-1]).T
     g = np.linalg.lstsq(W, -Um[-1], rcond=1e-12)[0]
     if not np.all(np.isfinite(g)):
         return None
-    gamma = np.append(g, 1.0 - g.sum())
-    x = states[-1].copy()
-    x[moving] = gamma @ states[1:, moving]
-    if float(np.max(np.abs(x - states[-1]))) > max_gain * last:
+    alpha = np.append(g, 1.0 - g.sum())
+    x = F[-1].copy()
+    x[moving] = alpha @ F[:, moving]
+    if float(np.max(np.abs(x - F[-1]))) > max_gain * last:
         return None
     return x
