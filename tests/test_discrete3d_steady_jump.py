@@ -10,7 +10,7 @@ import pytest
 
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
-from slipcycle.discrete3d.steady import _rre, simulate3d
+from slipcycle.discrete3d.steady import _anderson, _rre, simulate3d
 
 TOL = 1e-7          # cycling tolerance of the accelerated runs
 REF_TOL = 1e-11     # plain cycling, the reference
@@ -129,3 +129,30 @@ def test_rre_is_exact_for_a_linear_contraction_and_keeps_unmoved_components():
     x_star = _rre(states)
     assert np.array_equal(x_star[:2], frozen)
     np.testing.assert_allclose(x_star[2:], x_fix, atol=1e-9 * np.max(np.abs(x_fix)))
+
+
+def test_anderson_mixing_of_jumped_starts_is_exact_for_a_linear_map():
+    """Anderson mixing uses pairs (x_i, P(x_i)) whose starts need not follow one another
+    (the starts of jumped cycles): for an affine P whose error lies in k directions,
+    k + 1 pairs from arbitrary starts in that subspace give the fixed point exactly
+    (GMRES on the linear map); a component no pair moves is left as it is."""
+    rng = np.random.default_rng(7)
+    m, k = 10, 4
+    lam = np.array([0.995, 0.98, 0.9, -0.6])             # slow creep modes and a fast one
+    V = np.linalg.qr(rng.normal(size=(m, m)))[0][:, :k]
+    T = V @ np.diag(lam) @ V.T                           # acts on span(V) only
+    x_fix = rng.normal(size=m)
+
+    def P(x):
+        return x_fix + T @ (x - x_fix)
+
+    starts = [x_fix + V @ rng.normal(size=k) for _ in range(k + 1)]  # jumped, unrelated
+    frozen = np.array([7.0])
+    X = np.array([np.concatenate([frozen, x]) for x in starts])
+    F = np.array([np.concatenate([frozen, P(x)]) for x in starts])
+    x_star = _anderson(X, F)
+    assert x_star[0] == frozen[0]
+    np.testing.assert_allclose(x_star[1:], x_fix, atol=1e-9 * np.max(np.abs(x_fix)))
+    # with one pair too few the mixing is not exact: the test can fail
+    x_short = _anderson(X[1:], F[1:])
+    assert np.max(np.abs(x_short[1:] - x_fix)) > 1e-6
