@@ -2,7 +2,7 @@
 
 Model: ``block_on_rigid`` (P2, complete contact, uniform mesh), contact nodes 2·elements+1,
 height chosen for the DOF target. Each configuration runs in a fresh interpreter so that
-the peak resident set size (``resource.getrusage``, includes SuperLU's C allocations) is
+the peak resident set size (``resource.getrusage``, includes the solver's C allocations) is
 that of the one reduction. Target (issue 6): 1e5 DOF with 400 contact nodes in < 30 s
 and < 4 GB.
 """

@@ -5,11 +5,15 @@ uniform 31 × 31-element contact face (1 mm elements, 1024 contact nodes) on a r
 the block 60 × 60 × 40 mm graded by 1.05 (209,952 DOF; a slender 32 × 32 × 65-node column
 of the same size is much slower: nested dissection then cuts it into many full
 cross-sections); and a smaller sphere on a flat block
-(:func:`slipcycle.fe.sphere3d.sphere_on_block`, two bodies). Each configuration runs in a
-fresh interpreter so that the peak resident set size (``resource.getrusage``, includes
-SuperLU's C allocations) is that of the one reduction; wall and CPU (user + system) time
-are both reported, as the wall time depends on the load of the machine. Target: 2e5 DOF
-with 1000 contact nodes in < 60 s and < 8 GB.
+(:func:`slipcycle.fe.sphere3d.sphere_on_block`, two bodies). The condensation
+(:func:`slipcycle.condensation.schur_complement`) is one supernodal Cholesky factorisation
+by CHOLMOD (``cvxopt``, the ``fe`` extra) with the contact DOFs last, S read off the
+trailing block of the factor; without ``cvxopt`` it is SuperLU's LU (the child's JSON line
+names the one installed). Each configuration runs in a fresh interpreter so that the peak
+resident set size (``resource.getrusage``, includes the solver's C allocations) is that of
+the one reduction; wall and CPU (user + system) time are both reported, as the wall time
+depends on the load of the machine. Target: 2e5 DOF with 1000 contact nodes in < 60 s and
+< 8 GB.
 """
 
 from __future__ import annotations
@@ -41,8 +45,10 @@ else:
 t1, c1 = time.perf_counter(), time.process_time()
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 ndofs = int(red.source.split(" dofs")[0].split(", ")[-1])
+from slipcycle.condensation import cholmod_available
 print(json.dumps({"ndofs": ndofs, "nodes": int(red.C.shape[0]), "wall": t1 - t0,
                   "cpu": c1 - c0, "peak_mb": peak / 1024, "base_mb": base / 1024,
+                  "method": "CHOLMOD" if cholmod_available() else "SuperLU",
                   "source": red.source[-120:]}))
 """
 

@@ -117,3 +117,30 @@ def test_nested_dissection_condensation_equals_minimum_degree(monkeypatch):
             ref = mmd.loads[case][k]
             assert np.allclose(nd.loads[case][k], ref, rtol=0,
                                atol=1e-10 * np.abs(mmd.C).max())
+
+
+@pytest.mark.parametrize("formulation", ["displacement", "mixed"])
+def test_p1_stiffness_with_one_quadrature_point_equals_the_default_rule(formulation):
+    """P1 strains are constant per tetrahedron: the one-point rule of the 3-D reduction
+    integrates the stiffness exactly, i.e. as scikit-fem's default four-point rule does."""
+    from skfem import Basis, ElementTetP1, ElementVector
+
+    from slipcycle.fe.assembly import stiffness
+    from slipcycle.fe.contact3d import _stiffness
+    from slipcycle.fe.solid3d import block_mesh_3d
+
+    mesh = block_mesh_3d(Block3D(width_x=0.02, width_y=0.02, height=0.01, E=E, nu=NU,
+                                 contact_x=0.006, contact_y=0.006, elements=3,
+                                 element="P1"))
+    elem = ElementVector(ElementTetP1())
+    if formulation == "displacement":                            # two materials, two halves
+        materials = [(E, NU), (2 * E, 0.2)]
+        body = (mesh.p[0, mesh.t].mean(axis=0) > 0).astype(int)
+    else:
+        materials, body = [(E, 0.45)], np.zeros(mesh.t.shape[1], int)
+    K, _ = _stiffness(mesh, elem, materials, body, "P1", formulation)
+    ref = sum(stiffness(Basis(mesh, elem, elements=np.flatnonzero(body == k)), Ek, nuk,
+                        1.0, formulation)
+              for k, (Ek, nuk) in enumerate(materials))
+    assert Basis(mesh, elem).X.shape[1] == 4                     # the default rule
+    assert abs(K - ref).max() <= 1e-14 * abs(ref).max()
