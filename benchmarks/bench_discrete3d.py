@@ -1,13 +1,13 @@
 """Speed of the 3-D discrete model (isotropic Coulomb cone).
 
-Rows: the time per cycle of a 2000-node system (6000 dofs, dense FE-like K; the target
-of 60 s to the steady state in ≤ 50 cycles of 100 load samples is 1.2 s per cycle on a
-2-core machine), the full run to the steady state when a cycle is fast enough for it to
-take about a minute, and the cost per load-step solve against N (100 … 2000) with the
-fitted exponent. Times are CPU seconds (one BLAS thread), the quiet-machine estimate on a
-shared machine; the wall times are kept beside them (``wall_s``). The full run to the
-steady state (``discrete3d_2000_nodes_to_steady_state``) is always run: its value is the
-wall time (CPU beside it), with the steady-state class, the cycles run, the jumps of the
+Rows: the time per cycle of a 2000-node system (6000 dofs, dense FE-like K; the first
+three cycles, a measurement), its full run to the steady state (target: at most 50
+cycles of 100 load samples in under 60 s), and the cost per load-step solve against N
+(100 … 2000) with the fitted exponent. Times are CPU seconds (one BLAS thread), the
+quiet-machine estimate on a shared machine; the wall times are kept beside them
+(``wall_s``). The full run to the steady state
+(``discrete3d_2000_nodes_to_steady_state``) is always run: its value is the wall time
+(CPU beside it), with the steady-state class, the cycles run, the jumps of the
 accelerated cycle loop (``simulate3d``: reduced rank extrapolation, then Anderson mixing
 of every cycle of the pattern) and the cycles run on the frozen subdivision of the step
 control (``replay``, whose fixed point is accepted after a replay with every error
@@ -97,12 +97,13 @@ def _rows() -> list[dict]:
     slope = float(np.polyfit(np.log(sizes), np.log([c for _, c in costs]), 1)[0])
     rows.append({"name": "discrete3d_step_cost_exponent", "value": slope, "unit": "1",
                  "target": 2.0, "ok": slope <= 2.0})
-    # time per cycle from three cycles (assembly included: an upper bound), against
-    # 60 s / 50 cycles
+    # time per cycle from the first three cycles (assembly and the transient's extra
+    # refinements included: an upper bound); a measurement only, the target is the full
+    # run below (60 s for at most 50 cycles)
     wall, cpu, res = steady_time(2000, cycles=3)
     per_cycle = cpu / max(res.cycles_run, 1)
     rows.append({"name": "discrete3d_2000_nodes_time_per_cycle", "value": per_cycle,
-                 "unit": "CPU s", "target": 60.0 / 50, "ok": per_cycle <= 60.0 / 50,
+                 "unit": "CPU s", "target": None,
                  "wall_s": wall / max(res.cycles_run, 1),
                  "steady_state": res.steady_state, "cycles_run": res.cycles_run,
                  "slipping_nodes": len(res.slipping_nodes)})
