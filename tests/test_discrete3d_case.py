@@ -91,6 +91,7 @@ def test_result_of_a_python_system_and_its_repr():
     (("q1 = [[1.0, 1.0]]", "q1 = [[1.0, 1.0, 1.0]]"), "loading.q1"),
     (("step_tolerance = 1e-4", "step_tolerence = 1e-4"),
      "run.step_tolerence"),
+    (("step_tolerance = 1e-4", "step_tolerance = 1e-4\nreplay = 1"), "run.replay"),
 ])
 def test_invalid_cases_are_refused_naming_the_key(edit, key):
     with pytest.raises(CaseError) as err:
@@ -128,3 +129,21 @@ def test_sampled_critical_friction_finds_where_the_radial_matrix_loses_p_propert
         FrictionalSystem3D(A, B, C, 1.01 * fc.f_crit)
     assert err.value.key == "friction"
     FrictionalSystem3D(A, B, C, 1.01 * fc.f_crit, accept_ill_posed=True)
+
+
+def test_run_replay_reaches_the_solver_and_the_same_steady_state():
+    """``[run] replay = true`` freezes the step subdivision (the solver reports replayed
+    cycles) and ends on the steady state of the default adaptive run, within the step
+    control's error level."""
+    from slipcycle.discrete3d.case import read_discrete3d_case, solve_model
+    from slipcycle.io.case import parse_case_text
+
+    adaptive = slipcycle.run(CASE)
+    dc = read_discrete3d_case(parse_case_text(CASE.replace("step_tolerance = 1e-4",
+                                                      "step_tolerance = 1e-4\nreplay = true")))
+    assert dc.run["replay"] is True
+    frozen = solve_model(dc)
+    assert frozen.solution.replayed_cycles >= 1
+    assert frozen.solution.steady_state == adaptive.solution.steady_state == "cyclic_slip"
+    assert frozen.solution.dissipation_per_cycle == pytest.approx(
+        adaptive.solution.dissipation_per_cycle, rel=1e-3)

@@ -39,7 +39,7 @@ __all__ = ["Discrete3DCase", "DiscreteResult3D", "read_discrete3d_case", "discre
 
 #: run settings of a case built in Python (the defaults of the ``[run]`` table)
 RUN_DEFAULTS = {"cycles": 40, "steps_per_cycle": 100, "tol": 1e-8, "min_cycles": 1,
-                "step_tol": 1e-7}
+                "step_tol": 1e-7, "replay": False}
 FIELD_FORMATS = ("xdmf", "pvd")
 
 
@@ -132,7 +132,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
                   cases=load_cases(ld, n, lam, 2, file_case))
     rn = case.section("run", required=False)
     run = run_settings(rn, step_tol=("step_tolerance", lambda s, k: s.float(
-        k, 1e-7, gt=0.0, lt=1.0)))
+        k, 1e-7, gt=0.0, lt=1.0)), replay=("replay", lambda s, k: s.bool(k, False)))
     out = case.section("output", required=False)
     fields = out.data.get("fields", list(FIELD_FORMATS))
     if isinstance(fields, str):

@@ -16,7 +16,8 @@ meshes of ``[lap_joint.convergence]``, and runs the study
 - ``[lap_joint.convergence]``: ``coarsening`` (factors > 1 of the mesh size of extra,
   coarser meshes; ``[]``: the case's mesh only), ``rtol``;
 - ``[run]``: ``cycles``, ``steps_per_cycle``, ``steady_tol``, ``min_cycles``,
-  ``step_tolerance``, ``difference_tol``;
+  ``step_tolerance``, ``replay`` (freeze the step subdivision once the slip pattern
+  repeats, :func:`~slipcycle.discrete3d.steady.simulate3d`), ``difference_tol``;
 - ``[output]``: ``fields`` (``["xdmf"]``, ``["xdmf", "pvd"]`` or ``[]``).
 """
 
@@ -231,7 +232,8 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
            "steps_per_cycle": rn.int("steps_per_cycle", 40, ge=4),
            "tol": read_steady_tol(rn, 1e-8),
            "min_cycles": rn.int("min_cycles", 1, ge=1),
-           "step_tol": rn.float("step_tolerance", 1e-4, gt=0.0, lt=1.0)}
+           "step_tol": rn.float("step_tolerance", 1e-4, gt=0.0, lt=1.0),
+           "replay": rn.bool("replay", False)}
     difference_tol = rn.float("difference_tol", 1e-3, gt=0.0, lt=1.0)
     out = case.section("output", required=False)
     fields = out.data.get("fields", ["xdmf"])
