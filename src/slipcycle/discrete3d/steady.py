@@ -379,7 +379,7 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
             # run slipped or opened (its memory would change: another member of the
             # steady set), or if the residual rose above GROWTH × the best one, or did
             # not improve on it for PATIENCE jumps. (A node whose slip per cycle was
-            # dying out may stop: plain cycling does the same in the limit.)
+            # dying out may stop, where the mixing takes it: module docstring.)
             if residual < best[1]:
                 best = (starts[-1].copy(), residual, 0)
             else:
