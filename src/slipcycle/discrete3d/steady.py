@@ -525,12 +525,6 @@ def _geometric(states: np.ndarray, spread: float = 1.1) -> bool:
     return bool(ratios.max() < 1.0 and ratios.max() <= spread * ratios.min())
 
 
-def _rre(states: np.ndarray, max_gain: float = 1e4) -> np.ndarray | None:
-    """Reduced rank extrapolation of a plain fixed-point sequence x_0 … x_{k+1} ((k + 2,
-    M)): :func:`_anderson` of the pairs (x_i, x_{i+1})."""
-    return _anderson(states[:-1], states[1:], max_gain)
-
-
 def _anderson(X: np.ndarray, F: np.ndarray, max_gain: float = 1e4) -> np.ndarray | None:
     """Anderson (reduced rank) extrapolation of a fixed point of P from secant pairs.
 
