@@ -37,7 +37,7 @@ non-uniqueness and energy dissipation. J. Phys.: Conf. Ser. 382, 012002.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,7 +50,8 @@ from slipcycle.fe.assembly import default_formulation, stiffness
 from slipcycle.io.fe_formats.dofmap import node_frames
 from slipcycle.io.matrices import ReducedStiffness
 
-__all__ = ["Case3D", "ELEMENTS_3D", "mesh_nodes", "node_dofs_3d", "reduce_contact_3d"]
+__all__ = ["Case3D", "ELEMENTS_3D", "mesh_nodes", "node_dofs_3d", "reduce_contact_3d",
+           "condense_contact_3d"]
 
 ELEMENTS_3D = {"P1": ElementTetP1, "P2": ElementTetP2}
 
@@ -227,7 +228,6 @@ def reduce_contact_3d(mesh: MeshTet, *, materials: Sequence, pairs, normals,
     slipcycle.condensation.SingularModelError
         A body is not held against rigid motion with the pairs held.
     """
-    t0 = time.perf_counter()
     _check_element(element)
     if formulation not in ("displacement", "mixed", "auto"):
         raise InputError("formulation", "must be 'displacement', 'mixed' or 'auto', got "
@@ -235,8 +235,45 @@ def reduce_contact_3d(mesh: MeshTet, *, materials: Sequence, pairs, normals,
     elem = ElementVector(ELEMENTS_3D[element]())
     basis = Basis(mesh, elem)
     dofs, xyz = node_dofs_3d(basis)
+
+    def assemble():
+        K, forms = _stiffness(mesh, elem, materials, element_body, element, formulation)
+        return K, f"{element}/{'+'.join(sorted(set(forms)))}"
+
+    return condense_contact_3d(assemble, dofs, xyz, pairs=pairs, normals=normals,
+                               fixed=fixed, tangents=tangents, gap=gap, cases=cases,
+                               source=source, block=block)
+
+
+def condense_contact_3d(assemble: Callable, dofs: np.ndarray, xyz: np.ndarray, *, pairs,
+                        normals, fixed, tangents=None, gap=None,
+                        cases: Sequence[Case3D] = (), source: str = "",
+                        block: int = 256) -> ReducedStiffness:
+    """Condense an assembled 3-D stiffness onto N contact pairs (conventions: module doc).
+
+    The engine of :func:`reduce_contact_3d`, for any element whose stiffness is assembled
+    elsewhere (:func:`slipcycle.fe.hex8i.hex8i_stiffness`).
+
+    Parameters
+    ----------
+    assemble : callable
+        ``assemble() -> (K, label)``: the global stiffness (sparse, (n, n), N/m) and the
+        element's name for the provenance; called once the arguments are checked.
+    dofs : numpy.ndarray of int, shape (n_nodes, 3)
+        DOF indices (x, y, z) of every node.
+    xyz : numpy.ndarray, shape (3, n_nodes)
+        Node coordinates, m.
+    pairs, normals, fixed, tangents, gap, cases, source, block
+        As in :func:`reduce_contact_3d`.
+
+    Returns
+    -------
+    ReducedStiffness
+        As :func:`reduce_contact_3d`.
+    """
+    t0 = time.perf_counter()
     n_nodes = dofs.shape[0]
-    n = basis.N
+    n = int(dofs.max()) + 1
     pairs = np.asarray(pairs)
     if pairs.ndim != 2 or pairs.shape[1] != 2 or pairs.shape[0] == 0 \
             or not np.issubdtype(pairs.dtype, np.integer):
@@ -258,7 +295,7 @@ def reduce_contact_3d(mesh: MeshTet, *, materials: Sequence, pairs, normals,
         raise InputError("fixed", f"must be a boolean array of shape ({n_nodes}, 3)")
     if held_mask[c1].any():
         raise InputError("fixed", "a body-1 contact node is also held")
-    K, forms = _stiffness(mesh, elem, materials, element_body, element, formulation)
+    K, label = assemble()
 
     # u = T z + u0, z = [y; v (2N, node-major); w − g (N)] (fe.reduction.transformation)
     status = np.zeros(n, np.int8)                 # 0 own, 1 held, 3 body-1 contact
@@ -321,7 +358,7 @@ def reduce_contact_3d(mesh: MeshTet, *, materials: Sequence, pairs, normals,
     loads = {case.name: {"q": r[:2 * N, k].copy(), "p": r[2 * N:, k].copy()}
              for k, case in enumerate(cases)}
     loads["gap"] = {"q": -(B.T @ g), "p": -(C @ g)}
-    info = (f"{source} [{element}/{'+'.join(sorted(set(forms)))}, {n} dofs, {N} contact "
+    info = (f"{source} [{label}, {n} dofs, {N} contact "
             f"pairs, assembly {t1 - t0:.2f} s, condensation {t2 - t1:.2f} s]")
     return ReducedStiffness(A=A.copy(), B=B.copy(), C=C.copy(), tangential_dims=2,
                             nodes=c1.copy(), coordinates=xyz[:, c1].T.copy(),
