@@ -117,3 +117,38 @@ def test_compiled_classification_is_the_cone_law(seed, n):
     assert count == int(np.sum(fix_t | fix_n))
     np.testing.assert_array_equal(slip[:ns], np.flatnonzero(ref == SLIP))
     np.testing.assert_array_equal(sep[:npp], np.flatnonzero(ref == SEPARATED))
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 30))
+def test_separated_nodes_condensed_out_give_the_steps_of_the_whole_active_block(seed, n):
+    """Most nodes pulled off, some sheared into slip (the lap joint's open interface):
+    the block elimination of the separated rows (one Cholesky of K_PP per separated set)
+    reaches the state of the Newton method on the whole active block and of the full
+    3N-unknown reference, over three load steps that open, slip and re-close nodes."""
+    rng = np.random.default_rng(seed)
+    system = _coupled_system(rng, n)
+    condensed, whole = StepSolver(system, 1.0), StepSolver(system, 1.0)
+    whole.eliminate_separated = False
+    off = rng.random(n) < 0.6
+    off[0], off[1:3] = True, False
+    p1 = np.where(off, -rng.uniform(0.1, 0.5, n), rng.uniform(0.5, 1.0, n))
+    q1 = rng.normal(scale=0.1, size=(n, 2))
+    q1[1:3] = [[0.9, -0.4], [-0.6, 0.7]]
+    steps = (np.concatenate([q1.ravel(), p1]),
+             np.concatenate([rng.normal(scale=0.4, size=2 * n), rng.normal(scale=0.2, size=n)]),
+             np.concatenate([rng.normal(scale=0.4, size=2 * n), np.abs(p1) + 0.2]))
+    x, r = np.zeros(3 * n), np.zeros(3 * n)
+    seen = set()
+    for drw in steps:
+        a, b = condensed.solve(x, r, drw), whole.solve(x, r, drw)
+        xr, rr, mr = full_newton(system, x, r, drw, condensed.force_tol)
+        assert a is not None and b is not None
+        np.testing.assert_array_equal(a.modes, b.modes)
+        np.testing.assert_array_equal(a.modes, mr)
+        np.testing.assert_allclose(a.x, b.x, rtol=0, atol=1e-10)
+        np.testing.assert_allclose(a.x, xr, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(a.r, rr, rtol=0, atol=1e-9)
+        seen |= set(a.modes.tolist())
+        x, r = a.x, a.r
+    assert {SLIP, SEPARATED} <= seen

@@ -73,6 +73,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg import LinAlgError, cho_factor, cho_solve
 from scipy.linalg.lapack import dgetrf, dgetrs
 
 from slipcycle.discrete3d._kernels import (
@@ -136,6 +137,9 @@ class StepSolver:
 
     #: largest residual ratio of a chord step before the Newton matrix is refactorised
     chord_rate = 0.25
+    #: condense the separated nodes' rows out of the Newton matrix once per active set
+    #: (:meth:`_separated_block`); False: factorise the whole active block every time
+    eliminate_separated = True
 
     def __init__(self, system: FrictionalSystem3D, force_scale: float,
                  rel_tol: float = 1e-13, max_iter: int = 60):
@@ -156,6 +160,8 @@ class StepSolver:
         self._blocks: dict = {}
         self._max_blocks = 8
         self._lus: dict = {}
+        self._elims: dict = {}
+        self._chos: dict = {}
 
     def solve(self, x0: np.ndarray, r0: np.ndarray, drw: np.ndarray,
               guess: tuple | None = None) -> Step | None:
@@ -241,14 +247,13 @@ class StepSolver:
             self._blocks[key] = hit
         return hit
 
-    def _jacobian(self, KVU, ns, npp, zs, zsn, pS, fS, rhoS, idx):
+    def _jacobian(self, KVU, ns, npp, phi, nvec, fS, rhoS, idx):
         """Generalised Jacobian (m × m) of the active rows: the cone's linearisation
-        (:func:`~slipcycle.discrete3d.cone.slip_linearisation`) on the slipping rows, the
-        rows of K on the separated ones."""
+        (``phi``, ``nvec`` of :func:`~slipcycle.discrete3d.cone.slip_linearisation`) on
+        the slipping rows, the rows of K on the separated ones."""
         m = 2 * ns + 3 * npp
         J = np.empty((m, m))
         if ns:
-            phi, nvec = slip_linearisation(zs, zsn, pS, fS, rhoS)
             Kq = KVU[:2 * ns].reshape(ns, 2, m)
             Js = (Kq - np.matmul(phi, Kq)
                   - (fS[:, None, None] * nvec[:, :, None]) * KVU[m:][:, None, :])
@@ -259,6 +264,52 @@ class StepSolver:
         if npp:
             J[2 * ns:] = KVU[2 * ns:m]
         return J
+
+    def _separated_block(self, key, KVU, ns, npp):
+        """The separated nodes' rows condensed once per active set (block elimination).
+
+        With s = 2 ns slip unknowns and the separated ones P, the Newton matrix is
+        [[J_SS, J_SP], [K_PS, K_PP]], where K_PP (a principal block of the positive
+        definite K) does not depend on the iterate and the slip rows are a node-wise
+        linear map L of the rows of K: J_S· = L(K_{VS,·}) (+ ρΦ on the own columns).
+        Hence the Schur complement is the slip Jacobian of K̃ = K_{VS,S} − K_{VS,P} W,
+        W = K_PP⁻¹ K_PS, a system of 2 ns unknowns instead of 2 ns + 3 npp: the lap
+        joint's open nodes (most of its interface) cost one Cholesky per active set.
+
+        Returns
+        -------
+        tuple or None
+            (Cholesky factor of K_PP, W (p, s), K̃ (s + ns, s), K_{VS,P} (s + ns, p));
+            None when K_PP does not factorise (then the full matrix is used).
+        """
+        hit = self._elims.get(key)
+        if hit is None:
+            s, m = 2 * ns, 2 * ns + 3 * npp
+            # K_PP depends on the separated set only, which changes far less often than
+            # the slipping one: its factor is kept per separated set
+            cho = self._chos.get(key[1])
+            if cho is None:
+                try:
+                    cho = cho_factor(KVU[s:m, s:m], lower=True, check_finite=False)
+                except LinAlgError:
+                    return None
+                if len(self._chos) >= self._max_blocks:
+                    self._chos.pop(next(iter(self._chos)))
+                self._chos[key[1]] = cho
+            KSP = np.vstack([KVU[:s, s:m], KVU[m:, s:m]])
+            W = cho_solve(cho, KVU[s:m, :s], check_finite=False)
+            Kt = np.vstack([KVU[:s, :s], KVU[m:, :s]]) - KSP @ W
+            hit = (cho, W, Kt, KSP)
+            if len(self._elims) >= self._max_blocks:
+                self._elims.pop(next(iter(self._elims)))
+            self._elims[key] = hit
+        return hit
+
+    def _keep(self, key, lu) -> None:
+        """Keep the factorised Newton matrix of an active set for chord steps."""
+        if len(self._lus) >= self._max_blocks:
+            self._lus.pop(next(iter(self._lus)))
+        self._lus[key] = lu
 
     def _local_newton(self, key, S, P, KVU, xU, rV, x0, it):
         """Newton iterations on the active unknowns U with the active set held fixed.
@@ -294,6 +345,10 @@ class StepSolver:
         # while the residual falls at least fourfold per step; the converged solution is
         # that of the Newton method with a fresh matrix, only the path differs
         lu = self._lus.get(key)
+        # separated nodes beside slipping ones: eliminated (:meth:`_separated_block`)
+        elim = (self._separated_block(key, KVU, ns, npp)
+                if npp and ns and self.eliminate_separated else None)
+        s = 2 * ns
         res_prev = np.inf
         while True:
             res, changed = active_residual(xU, rV, v0S, fS, rhoS, rhoP, ns, npp, R, zs,
@@ -308,18 +363,71 @@ class StepSolver:
             it += 1
             if lu is not None and res > self.chord_rate * res_prev:
                 lu = None
-            if lu is None:
-                self.stats["factorisations"] += 1
-                J = self._jacobian(KVU, ns, npp, zs, zsn, rV[m:], fS, rhoS, idx)
-                lu, piv, info = dgetrf(J, overwrite_a=True)
-                if info != 0:           # singular Newton matrix
+            if ns == 0:
+                # separated nodes only: the Newton matrix is K_PP itself
+                if lu is None:
+                    self.stats["factorisations"] += 1
+                    try:
+                        lu = ("cho", cho_factor(KVU[:m, :m], lower=True,
+                                                check_finite=False))
+                    except LinAlgError:
+                        return None, False, it
+                    self._keep(key, lu)
+                delta = cho_solve(lu[1], -R, check_finite=False)
+            elif elim is not None:
+                cho, W, Kt, KSP = elim
+                if lu is None:
+                    self.stats["factorisations"] += 1
+                    phi, nvec = slip_linearisation(zs, zsn, rV[m:], fS, rhoS)
+                    J = self._jacobian(Kt, ns, 0, phi, nvec, fS, rhoS, idx)
+                    f_lu, piv, info = dgetrf(J, overwrite_a=True)
+                    if info != 0:           # singular Newton matrix
+                        return None, False, it
+                    lu = (f_lu, piv, phi, nvec)
+                    self._keep(key, lu)
+                f_lu, piv, phi, nvec = lu
+                rhs = -R[:s]
+                y = None
+                if np.any(R[s:]):       # zero after the first step: its rows are linear
+                    y = cho_solve(cho, R[s:], check_finite=False)
+                    z = KSP @ y                          # K_{VS,P} K_PP⁻¹ R_P
+                    zq = z[:s].reshape(ns, 2)
+                    rhs += (zq - np.matmul(phi, zq[:, :, None])[:, :, 0]
+                            - (fS * z[s:])[:, None] * nvec).ravel()   # J_SP K_PP⁻¹ R_P
+                dS, info = dgetrs(f_lu, piv, rhs)
+                if info != 0:
                     return None, False, it
-                lu = (lu, piv)
-                if len(self._lus) >= self._max_blocks:
-                    self._lus.pop(next(iter(self._lus)))
-                self._lus[key] = lu
-            delta, info = dgetrs(lu[0], lu[1], -R)
-            if info != 0 or not np.all(np.isfinite(delta)):
+                dP = -(W @ dS) if y is None else -y - W @ dS
+                if not (np.all(np.isfinite(dS)) and np.all(np.isfinite(dP))):
+                    return None, False, it
+                res_prev = res
+                stepped = True
+                D[:s] += dS
+                D[s:] += dP
+                xU[:s] += dS
+                xU[s:] += dP
+                # the slip rows follow K; the separated rows are solved exactly by the
+                # step (K_PS dS + K_PP dP = −R_P), so their reactions are zero: the
+                # caller recomputes every reaction from K once the set is left
+                rV[:s] += KVU[:s] @ np.concatenate([dS, dP])
+                rV[m:] += KVU[m:] @ np.concatenate([dS, dP])
+                rV[s:m] = 0.0
+                continue
+            else:
+                if lu is None:
+                    self.stats["factorisations"] += 1
+                    phi, nvec = (slip_linearisation(zs, zsn, rV[m:], fS, rhoS) if ns
+                                 else (None, None))
+                    J = self._jacobian(KVU, ns, npp, phi, nvec, fS, rhoS, idx)
+                    f_lu, piv, info = dgetrf(J, overwrite_a=True)
+                    if info != 0:           # singular Newton matrix
+                        return None, False, it
+                    lu = (f_lu, piv)
+                    self._keep(key, lu)
+                delta, info = dgetrs(lu[0], lu[1], -R)
+                if info != 0:
+                    return None, False, it
+            if not np.all(np.isfinite(delta)):
                 return None, False, it
             res_prev = res
             stepped = True
