@@ -125,3 +125,16 @@ def test_summary_is_flat_with_units():
 def test_bad_sequences_raise_input_error(spacing, values):
     with pytest.raises(InputError):
         mesh_convergence(spacing, values)
+
+
+@pytest.mark.parametrize("h", [[0.00282, 0.00251], [1.0, 0.9, 0.5], [1.0, 0.5, 0.45]])
+def test_meshes_too_close_are_never_called_converged(h):
+    """Refinement ratios below 1.3 (Celik et al. 2008): even values that agree to 0.1 %
+    give no verdict of convergence, but keep their order and extrapolation."""
+    f = _sequence(1.0, 0.01, 1.0, h)
+    mc = mesh_convergence(h, f)
+    assert not mc.converged
+    assert "too close" in mc.message and "1.3" in mc.message
+    assert mc.extrapolated == pytest.approx(1.0, rel=1e-9)
+    h2 = [h[0] * 2.0 ** -k for k in range(len(h))]
+    assert mesh_convergence(h2, _sequence(1.0, 0.01, 1.0, h2)).converged   # ratio 2

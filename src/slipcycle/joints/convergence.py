@@ -17,6 +17,11 @@ range: it is reported as not converged, with no order and no extrapolation.
 
 A dissipation that extrapolates to zero (or through it) vanishes under refinement: the
 finest value is then a discretisation effect, and its relative error is infinite.
+
+Meshes that differ too little say nothing about the error: two pre-asymptotic meshes of
+nearly the same spacing can agree by chance. A sequence whose refinement ratios (between
+the meshes the estimate uses) fall below :data:`MIN_RATIO` = 1.3 (Celik et al. 2008) is
+never called converged; its order and extrapolation are still reported.
 """
 
 from __future__ import annotations
@@ -27,7 +32,10 @@ from dataclasses import dataclass
 
 from slipcycle.errors import InputError
 
-__all__ = ["MeshConvergence", "mesh_convergence", "P_BRACKET"]
+__all__ = ["MeshConvergence", "mesh_convergence", "P_BRACKET", "MIN_RATIO"]
+
+#: smallest refinement ratio h_coarse/h_fine of an error estimate (Celik et al. 2008)
+MIN_RATIO: float = 1.3
 
 #: observed orders searched for; beyond it the order is reported as not measurable
 P_BRACKET: float = 30.0
@@ -211,7 +219,15 @@ def mesh_convergence(spacing: Sequence[float], values: Sequence[float], *,
     n = len(f)
     fine = f[-1]
 
+    used = h[-3:] if n >= 3 else h[-2:]
+    ratio = min(a / b for a, b in zip(used, used[1:], strict=False))
+
     def result(order, c, rel, converged, message):
+        if converged and ratio < MIN_RATIO * (1.0 - 1e-9):
+            converged = False
+            message = (f"NOT shown mesh-converged: the meshes are too close to estimate the "
+                       f"error (refinement ratio {ratio:.3g} < {MIN_RATIO:g}, Celik et al. "
+                       f"2008); {message.split(': ', 1)[-1]}")
         return MeshConvergence(h, f, order, c, rel, bool(converged), message, unit)
 
     def verdict(rel: float) -> str:
