@@ -96,8 +96,59 @@ def study_rows(repeats: int = 1) -> list[dict]:
             {"name": f"{name}: CPU", "value": cpu, "unit": "s"}]
 
 
+_REFINE_CHILD = r"""
+import json, sys, time
+from slipcycle.fe.lap_joint import LapJoint
+from slipcycle.joints.lap_joint_case import joint_contact
+from slipcycle.joints.lap_joint_study import StudySettings, run_protocol, standard_protocol
+t0 = time.perf_counter()
+joint = LapJoint(plate_length=0.06, plate_width=0.03, thickness=0.003, overlap=0.03,
+                 bolt_diameter=0.0066, washer_diameter=0.012, mesh_size=0.005,
+                 element="H8I", refine=int(sys.argv[1]), end_relief=0.004,
+                 end_relief_depth=1e-5)
+contact = joint_contact(joint)
+t1 = time.perf_counter()
+settings = StudySettings(preload=5e3, service_amplitude=1e3, friction=0.3,
+                         run=dict(cycles=30, steps_per_cycle=20, tol=1e-6, step_tol=1e-4))
+sol = run_protocol(contact, standard_protocol("simultaneous", 2), settings).solution
+print(json.dumps({"nodes": contact.n_nodes, "spacing": contact.spacing,
+                  "build": t1 - t0, "solve": time.perf_counter() - t1,
+                  "D": sol.dissipation_per_cycle, "cycles": int(sol.cycles_run)}))
+"""
+
+
+def refinement_rows(levels: tuple = (0, 1)) -> list[dict]:
+    """Nested refinement of a small H8I joint (the ``NESTED`` case of
+    tests/test_lap_joint_study.py, one protocol): contact nodes, spacing, dissipation and
+    the wall time of the steady-state solve per level, with the fitted exponent of the
+    solve time against the number of contact nodes (one run per level, fresh interpreter).
+    """
+    import math
+
+    runs = []
+    for k in levels:
+        out = subprocess.run([sys.executable, "-c", _REFINE_CHILD, str(k)],
+                             capture_output=True, text=True, check=True)
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    rows = []
+    for k, r in zip(levels, runs, strict=True):
+        name = (f"small lap joint refine={k}: {r['nodes']} nodes, spacing "
+                f"{1e3 * r['spacing']:.3g} mm")
+        rows += [{"name": f"{name}: build + reduce", "value": r["build"], "unit": "s"},
+                 {"name": f"{name}: steady state ({r['cycles']} cycles)",
+                  "value": r["solve"], "unit": "s"},
+                 {"name": f"{name}: dissipation per cycle", "value": 1e6 * r["D"],
+                  "unit": "uJ"}]
+    if len(runs) > 1:
+        a, b = runs[0], runs[-1]
+        slope = math.log(b["solve"] / a["solve"]) / math.log(b["nodes"] / a["nodes"])
+        rows.append({"name": "small lap joint: steady-state time ~ N^p, fitted p",
+                     "value": slope, "unit": "1"})
+    return rows
+
+
 def benchmarks() -> list[dict]:
-    return model_rows() + study_rows()
+    return model_rows() + study_rows() + refinement_rows()
 
 
 if __name__ == "__main__":

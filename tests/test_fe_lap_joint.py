@@ -30,8 +30,15 @@ SMALL = LapJoint(plate_length=0.06, plate_width=0.03, thickness=0.003, overlap=0
                  bolt_diameter=0.0066, washer_diameter=0.012, mesh_size=0.003)
 
 
+@pytest.fixture(scope="module", params=["P1", "H8I"])
+def small(request):
+    """The small joint reduced with linear tetrahedra and with incompatible-mode
+    hexahedra: every test that takes it holds for both elements."""
+    return lap_joint_model(dataclasses.replace(SMALL, element=request.param))
+
+
 @pytest.fixture(scope="module")
-def small():
+def small_p1():
     return lap_joint_model(SMALL)
 
 
@@ -87,10 +94,12 @@ def _bonded_grip_reactions(joint: LapJoint, k: int):
     return out
 
 
-def test_bolt_and_service_cases_balance_the_grip_reactions_of_the_full_bonded_model(small):
+def test_bolt_and_service_cases_balance_the_grip_reactions_of_the_full_bonded_model(
+        small_p1):
     """Upper-plate equilibrium: Σp^w(bolt) + R_z = 1 N, Σq^w + R = 0, with R the grip
     reactions of the full FE model solved directly; the service scale (N per m of grip
     motion) equals the full model's grip stiffness."""
+    small = small_p1
     red = small.reduced
     r_bolt, r_service = _bonded_grip_reactions(SMALL, 0)
     case = red.loads["bolt_0"]
@@ -184,7 +193,7 @@ def test_plates_are_conforming_tetrahedral_meshes_of_the_right_volume():
                | np.any(np.isclose(c[0][:, None], [x0, a, b, x1]), axis=1)
                | (r < SMALL.bolt_diameter / 2))
     assert on_face.all()
-    tri = m.plan_points[m.interface_triangles]
+    tri = m.plan_points[m.interface_cells]
     e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
     overlap_area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
     plate_area = (SMALL.plate_length - SMALL.overlap) * SMALL.plate_width + overlap_area
@@ -268,6 +277,57 @@ def test_total_contact_stiffness_converges_under_mesh_refinement():
     assert abs(np.diff(values[:, 0])[-1]) < 0.05 * values[-1, 0]
 
 
+def test_hexahedral_plates_are_positive_and_fill_the_plates_volume():
+    """H8I meshes: every hexahedron has a positive Jacobian at its eight Gauss points and
+    the volumes (∑ det J over them) add up to t times the plan area of each plate."""
+    joint = dataclasses.replace(SMALL, element="H8I")
+    m = lap_joint_mesh(joint)
+    assert m.cells.shape[0] == 8 and m.interface_cells.shape[1] == 4
+    X = m.points[:, m.cells].transpose(2, 1, 0)                  # (elements, 8, 3)
+    corners = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
+                        [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], float)
+    vol = np.zeros(X.shape[0])
+    for pt in corners / np.sqrt(3.0):                  # the 2×2×2 Gauss points, weight 1
+        grad = np.empty((8, 3))
+        for d in range(3):
+            o1, o2 = (k for k in range(3) if k != d)
+            grad[:, d] = (corners[:, d] / 8 * (1 + corners[:, o1] * pt[o1])
+                          * (1 + corners[:, o2] * pt[o2]))
+        det = np.linalg.det(np.einsum("kd,mkc->mcd", grad, X))
+        assert det.min() > 0
+        vol += det
+    quads = m.plan_points[m.plan_cells]
+    x, y = quads[..., 0], quads[..., 1]
+    area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)
+    assert area.min() > 0
+    centre_x = x.mean(axis=1)
+    _, a, b, _ = m.ranges
+    for body, cells in ((0, centre_x > a), (1, centre_x < b)):
+        assert vol[m.element_body == body].sum() == pytest.approx(
+            joint.thickness * area[cells].sum(), rel=1e-12)
+
+
+def test_rounded_plate_ends_open_an_initial_gap_tangent_to_the_flat_face():
+    """g = δ (1 − s/d)² within d of each plate end: δ at the ends x = ∓c/2 of the upper
+    and lower plates, zero with zero slope where the relief starts, zero elsewhere; the
+    reduced joint carries the gap's reactions −[Bᵀg; Cg] as its load case ``gap``."""
+    joint = dataclasses.replace(SMALL, end_relief=0.003, end_relief_depth=2e-5)
+    c, d, depth = joint.overlap, joint.end_relief, joint.end_relief_depth
+    x = np.array([-c / 2, -c / 2 + d / 2, -c / 2 + d, 0.0, c / 2 - d, c / 2])
+    assert np.allclose(joint.end_gap(x), [depth, depth / 4, 0, 0, 0, depth], rtol=1e-12,
+                       atol=1e-12 * depth)
+    eps = 1e-7
+    # the secant slope over ε is δ ε/d², a vanishing fraction of the end slope 2δ/d
+    assert joint.end_gap(np.array([-c / 2 + d - eps]))[0] / eps < 1e-4 * depth / d
+    red = lap_joint_model(joint).reduced
+    g = joint.end_gap(red.coordinates[:, 0])
+    assert g.max() == pytest.approx(depth) and np.count_nonzero(g) < g.size / 2
+    scale = np.abs(red.C).max() * depth
+    assert np.abs(red.loads["gap"]["p"] + red.C @ g).max() < 1e-12 * scale
+    assert np.abs(red.loads["gap"]["q"] + red.B.T @ g).max() < 1e-12 * scale
+    assert "gap" not in lap_joint_model(SMALL).reduced.loads      # sharp ends: none
+
+
 @pytest.mark.parametrize(("changes", "key"), [
     ({"plate_length": -0.1}, "plate_length"),
     ({"nu": 0.5}, "nu"),
@@ -286,6 +346,10 @@ def test_total_contact_stiffness_converges_under_mesh_refinement():
     ({"bolt_positions": ((0.0, -0.002), (0.0, 0.002))}, "bolt_positions"),
     ({"bolt_positions": ((0.0, -0.01), (0.014, 0.01))}, "bolt_positions"),
     ({"layers": 0}, "layers"),
+    ({"end_relief": 0.003}, "end_relief_depth"),
+    ({"end_relief_depth": 1e-5}, "end_relief"),
+    ({"end_relief": -0.001, "end_relief_depth": 1e-5}, "end_relief"),
+    ({"end_relief": 0.012, "end_relief_depth": 1e-5}, "end_relief"),
 ])
 def test_bad_joint_inputs_give_one_line_errors_naming_the_field(changes, key):
     with pytest.raises(InputError) as err:

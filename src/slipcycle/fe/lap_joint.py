@@ -27,6 +27,9 @@ case                unit what
                          interface is stuck
 ``service_y``       N    the same along +y (in plane, across the plates)
 ``service_z``       N    the same along +z (out of plane: bends the joint)
+``gap``             1    only with rounded ends (``end_relief``): the reactions
+                         −[Bᵀ g; C g] of the initial gap g, applied once (the
+                         separation w includes g)
 =================== ==== ============================================================
 
 The service cases are displacement-controlled (a testing machine's grip) but normalised
@@ -51,15 +54,25 @@ region is the whole overlap, so the solver finds where the plates open. With the
 edges farther from the washers than the clamped region reaches
 (:attr:`LapJoint.edge_distance`, washer rim to plate end: a few plate thicknesses; the
 example has 3 t, and its region closed under preload ends ≈ 0.4 t beyond the washer rims
-along x, at h = 2 mm and at h = 1 mm) the plate ends x = ±c/2 lift off. They are the
-only places where a sharp body corner could press on the other plate (a complete contact
-with a stress singularity; Hills, Nowell & Sackfield 1993). The hole walls and the side
-faces y = ±W/2 run through both plates as one flat free surface, which for identical
-plates leaves the interface tractions bounded. Slip then starts at a contact edge where
-the pressure falls smoothly to zero, the situation in which the microslip dissipation of
-a discretised contact has a limit under refinement (as for Cattaneo–Mindlin, Johnson
-1985, §7.2); the dissipation itself on several meshes is studied in
-:mod:`slipcycle.joints`.
+along x, at h = 2 mm and at h = 1 mm) the plate ends x = ±c/2 lift off under the preload.
+A reversed service load bends them back: in its compressive half the eccentricity of the
+single lap presses each plate's end on the other plate. A sharp-cornered end then makes a
+complete contact with a stress singularity (Hills, Nowell & Sackfield 1993), whose
+microslip dissipation has no limit under refinement; rounded ends (``end_relief``: the
+interface face recedes by δ (1 − s/d)² over the last d of each plate, tangent to the
+flat face) keep that contact incomplete. The hole walls and the side faces y = ±W/2 run
+through both plates as one flat free surface, which for identical plates leaves the
+interface tractions bounded. Slip then starts at a contact edge where the pressure falls
+smoothly to zero, the situation in which the microslip dissipation of a discretised
+contact has a limit under refinement (as for Cattaneo–Mindlin, Johnson 1985, §7.2); the
+dissipation itself on several meshes is studied in :mod:`slipcycle.joints`.
+
+Why hexahedra. The plates bend; linear tetrahedra lock in bending until the element size
+is about half the thickness, so their dissipation is pre-asymptotic on any mesh the
+study can afford. Hexahedra with incompatible modes (``element = "H8I"``,
+:mod:`slipcycle.fe.hex8i`) represent pure bending exactly with one element through the
+thickness, and their bilinear faces keep the consistent nodal forces of a pressure
+positive, which node-to-node friction needs.
 
 References
 ----------
@@ -86,9 +99,10 @@ from slipcycle.io.matrices import ReducedStiffness
 __all__ = ["LapJoint", "LapJointModel", "LapJointMesh", "lap_joint_model", "lap_joint_mesh",
            "bolt_centres", "EXAMPLE"]
 
-#: linear tetrahedra only: node-to-node friction needs positive consistent nodal forces
-#: of a pressure (those of quadratic faces vanish at the vertices)
-_ELEMENTS = ("P1",)
+#: elements with positive consistent nodal forces of a pressure, which node-to-node friction
+#: needs (those of quadratic triangles vanish at the vertices): linear tetrahedra and
+#: hexahedra with incompatible modes (bilinear faces)
+_ELEMENTS = ("P1", "H8I")
 
 
 @dataclass(frozen=True)
@@ -116,18 +130,34 @@ class LapJoint:
     mesh_size : float
         Element size h in the overlap (the node spacing of the interface), m.
     element : str
-        ``"P1"`` (linear tetrahedra), the only choice: node-to-node friction needs the
-        positive consistent nodal forces of a pressure, which quadratic faces do not give.
+        ``"H8I"``: hexahedra with incompatible modes (:mod:`slipcycle.fe.hex8i`), exact in
+        pure bending, on a quadrilateral plan mesh; ``"P1"``: linear tetrahedra, which
+        lock in bending until t/h ≳ 2. Quadratic elements are not offered: node-to-node
+        friction needs the positive consistent nodal forces of a pressure, which quadratic
+        faces do not give.
     bolt_positions : tuple of (x, y) pairs, optional
         Bolt centres relative to the centre of the overlap, m. Default: one row across
         the width at x = 0, pitch W/K, y_k = −W/2 + (k + ½) W/K.
     layers : int, optional
         Elements through each plate's thickness; default max(2, ⌈t/h⌉). Linear
         tetrahedra are too stiff in bending until t/h ≳ 2 (the contact stiffness then
-        converges with an observed order ≈ 1, tests/test_fe_lap_joint.py); coarser meshes
-        are pre-asymptotic.
+        converges with an observed order ≈ 1, tests/test_fe_lap_joint.py); coarser P1
+        meshes are pre-asymptotic.
     growth : float
         Element size far from the overlap as a multiple of h (≥ 1).
+    refine : int
+        Uniform refinements of the mesh of size ``mesh_size`` (0 … 3): each splits every
+        plan cell into four and doubles the default layers, so the meshes of one
+        ``mesh_size`` with refine = 0, 1, 2 are nested, spacing h, h/2, h/4 (the
+        families of :mod:`slipcycle.joints.convergence` studies).
+    end_relief : float
+        Length d of the rounded plate ends, m (0: sharp-cornered ends). Over the last d
+        of the overlap each plate's interface face recedes from the other plate, by
+        δ (1 − s/d)² at the distance s < d from its end: an initial gap, tangent to the
+        flat face where the relief starts (module docstring, "Why the contact is
+        incomplete").
+    end_relief_depth : float
+        The recess δ at the plate end, m (> 0 exactly when ``end_relief`` > 0).
     """
 
     plate_length: float = 0.1
@@ -144,6 +174,9 @@ class LapJoint:
     bolt_positions: tuple | None = None
     layers: int | None = None
     growth: float = 4.0
+    refine: int = 0
+    end_relief: float = 0.0
+    end_relief_depth: float = 0.0
     _centres: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -155,6 +188,14 @@ class LapJoint:
         check_number("growth", self.growth, ge=1.0, le=20.0)
         if self.layers is not None:
             check_number("layers", self.layers, ge=1, le=200, integer=True)
+        check_number("refine", self.refine, ge=0, le=3, integer=True)
+        check_number("end_relief", self.end_relief, ge=0.0)
+        check_number("end_relief_depth", self.end_relief_depth, ge=0.0)
+        if (self.end_relief > 0) != (self.end_relief_depth > 0):
+            raise InputError("end_relief_depth" if self.end_relief > 0 else "end_relief",
+                             "end_relief and end_relief_depth must both be positive (rounded"
+                             " ends) or both zero (sharp ends), got "
+                             f"{self.end_relief:g} m and {self.end_relief_depth:g} m")
         if self.overlap >= self.plate_length:
             raise InputError("overlap", f"must be < plate_length ({self.plate_length:g} m), "
                              f"got {self.overlap:g}")
@@ -169,10 +210,14 @@ class LapJoint:
             raise InputError("mesh_size", "must be ≤ a quarter of the overlap and of the "
                              f"width, got {self.mesh_size:g}")
         if self.element not in _ELEMENTS:
-            raise InputError("element", "must be 'P1' (node-to-node friction needs the "
-                             "positive nodal forces of linear faces), got "
+            raise InputError("element", "must be 'H8I' or 'P1' (node-to-node friction "
+                             "needs the positive nodal forces of linear faces), got "
                              f"{self.element!r}")
         object.__setattr__(self, "_centres", self._check_bolts())
+        if self.end_relief > 0 and self.end_relief >= self.edge_distance:
+            raise InputError("end_relief", "the rounded ends must stop short of the "
+                             f"washers: end_relief < {self.edge_distance:g} m (washer rim to "
+                             f"plate end), got {self.end_relief:g}")
 
     def _check_bolts(self) -> np.ndarray:
         K, W, c = int(self.bolt_count), self.plate_width, self.overlap
@@ -222,7 +267,21 @@ class LapJoint:
         """Elements through each plate's thickness."""
         if self.layers is not None:
             return int(self.layers)
-        return max(2, math.ceil(self.thickness / self.mesh_size - 1e-9))
+        return max(2, math.ceil(self.thickness / self.mesh_size - 1e-9)) * 2 ** self.refine
+
+
+    def end_gap(self, x: np.ndarray) -> np.ndarray:
+        """Initial gap (m) between the plates at the interface points x (m, along the
+        plates) from the rounded ends: δ (1 − s/d)² within s < d of either plate end
+        (the upper plate ends at x = −c/2, the lower at x = c/2), 0 elsewhere."""
+        d, depth = self.end_relief, self.end_relief_depth
+        x = np.asarray(x, float)
+        if d == 0:
+            return np.zeros_like(x)
+        s_upper = x + self.overlap / 2            # distance from the upper plate's end
+        s_lower = self.overlap / 2 - x
+        return depth * (np.clip(1 - s_upper / d, 0, None) ** 2
+                        + np.clip(1 - s_lower / d, 0, None) ** 2)
 
 
 #: the example joint: two 4 mm steel plates, two M8 bolts in a row across, h = 2 mm
@@ -253,7 +312,10 @@ class LapJointModel:
     bolt_centres : numpy.ndarray, shape (K, 2)
         Bolt centres, m.
     spacing : float
-        Node spacing h at the interface (``joint.mesh_size``), m.
+        Representative node spacing of the interface, (A/N)^{1/2} with A the contact
+        area of the N nodes (Celik et al. 2008, J. Fluids Eng. 130, 078001), m: the h of
+        mesh-convergence studies (it follows the mesh, where ``joint.mesh_size`` is only
+        the request: the quadrilateral meshes come out finer than asked near the holes).
     grip_share : numpy.ndarray, shape (K,)
         Part of each bolt's 1 N preload carried by the clamped grips instead of the
         interface while it is stuck: Σ p^w = 1 − grip_share[k], N.
@@ -279,35 +341,49 @@ class LapJointModel:
 
 @dataclass(frozen=True)
 class LapJointMesh:
-    """The two plates in one tetrahedral mesh, interface nodes duplicated.
+    """The two plates in one mesh, interface nodes duplicated.
 
     Attributes
     ----------
-    mesh : skfem.MeshTet
-        Both plates, m; the upper plate's vertices and elements come first.
+    points : numpy.ndarray, shape (3, n_nodes)
+        Node coordinates, m; the upper plate's nodes come first.
+    cells : numpy.ndarray of int, shape (4, n_elements) or (8, n_elements)
+        Tetrahedra (P1) or hexahedra (H8I, vertex order of
+        :func:`slipcycle.fe.lap_joint_mesh.extrude_hexes`); the upper plate's first.
     element_body : numpy.ndarray of int, shape (n_elements,)
         0 for the upper plate, 1 for the lower.
     plan_points : numpy.ndarray, shape (n, 2)
         The plan-view nodes (x, y), m.
-    interface_triangles : numpy.ndarray of int, shape (m, 3)
-        Plan triangles of the overlap (indices into ``plan_points``).
+    interface_cells : numpy.ndarray of int, shape (m, 3) or (m, 4)
+        Plan triangles or quadrilaterals of the overlap (indices into ``plan_points``).
+    plan_cells : numpy.ndarray of int, shape (m', 3) or (m', 4)
+        Every plan cell of both plates.
     ranges : tuple of float
         x of the lower grip, of the overlap edges −c/2, c/2 and of the upper grip, m.
     """
 
-    mesh: object
+    points: np.ndarray
+    cells: np.ndarray
     element_body: np.ndarray
     plan_points: np.ndarray
-    interface_triangles: np.ndarray
+    interface_cells: np.ndarray
+    plan_cells: np.ndarray
     ranges: tuple
+
+    @property
+    def mesh(self):
+        """The tetrahedra as a :class:`skfem.MeshTet` (P1 meshes only)."""
+        from skfem import MeshTet
+
+        if self.cells.shape[0] != 4:
+            raise ValueError("a hexahedral lap-joint mesh has no MeshTet")
+        return MeshTet(self.points, self.cells)
 
 
 def lap_joint_mesh(joint: LapJoint) -> LapJointMesh:
-    """Tetrahedral mesh of both plates with duplicated (coincident) interface nodes
-    (:mod:`slipcycle.fe.lap_joint_mesh`)."""
-    from skfem import MeshTet
-
-    from slipcycle.fe.lap_joint_mesh import extrude_tets, plan_mesh
+    """Tetrahedral (P1) or hexahedral (H8I) mesh of both plates with duplicated
+    (coincident) interface nodes (:mod:`slipcycle.fe.lap_joint_mesh`)."""
+    from slipcycle.fe.lap_joint_mesh import extrude_hexes, extrude_tets, plan_mesh
 
     L, c, t, h = joint.plate_length, joint.overlap, joint.thickness, joint.mesh_size
     a, b = -c / 2, c / 2
@@ -315,56 +391,55 @@ def lap_joint_mesh(joint: LapJoint) -> LapJointMesh:
     h_far = min(joint.growth * h, joint.plate_width / 2, L - c)
     pts, tri = plan_mesh((x0, x1), joint.plate_width, (a, b), joint.centres,
                          joint.bolt_diameter / 2, joint.washer_diameter / 2, h,
-                         max(h, h_far))
+                         max(h, h_far), quads=joint.element == "H8I",
+                         refine=int(joint.refine))
+    extrude = extrude_hexes if joint.element == "H8I" else extrude_tets
     xc = pts[tri].mean(axis=1)[:, 0]
     upper, lower = tri[xc > a], tri[xc < b]
     z = np.linspace(0.0, t, joint.layer_count + 1)
-    p1, t1 = extrude_tets(pts, upper, z)
-    p2, t2 = extrude_tets(pts, lower, z - t)
+    p1, t1 = extrude(pts, upper, z)
+    p2, t2 = extrude(pts, lower, z - t)
     p = np.hstack([p1, p2])
-    tets = np.hstack([t1, t2 + p1.shape[1]])
+    cells = np.hstack([t1, t2 + p1.shape[1]])
     body = np.concatenate([np.zeros(t1.shape[1], int), np.ones(t2.shape[1], int)])
     interface = tri[(xc > a) & (xc < b)]
-    return LapJointMesh(MeshTet(p, tets), body, pts, interface, (x0, a, b, x1))
+    return LapJointMesh(p, cells, body, pts, interface, tri, (x0, a, b, x1))
 
 
-def _washer_forces(basis, mesh, joint: LapJoint, k: int, dofs: np.ndarray) -> np.ndarray:
-    """Nodal forces (n_nodes, 3) of bolt k's washer pressures, 1 N on each plate, N."""
-    from skfem import FacetBasis, LinearForm, asm
+def _washer_forces(m: LapJointMesh, xyz: np.ndarray, joint: LapJoint, k: int) -> np.ndarray:
+    """Nodal forces (n_nodes, 3) of bolt k's washer pressures, 1 N on each plate, N: the
+    consistent forces of a uniform pressure on the plan cells of the annulus (hole radius
+    to washer radius; the washer circle is a mesh line) on the faces z = ±t."""
+    from slipcycle.fe.lap_joint_mesh import cell_weights
 
     t = joint.thickness
     cx, cy = joint.centres[k]
     rh, rw = joint.bolt_diameter / 2, joint.washer_diameter / 2
-    f = mesh.boundary_facets()
-    mid = mesh.p[:, mesh.facets[:, f]].mean(axis=1)
-    r = np.hypot(mid[0] - cx, mid[1] - cy)
-    in_annulus = (r > rh) & (r < rw)
+    mid = m.plan_points[m.plan_cells].mean(axis=1)
+    r = np.hypot(mid[:, 0] - cx, mid[:, 1] - cy)
+    weights = cell_weights(m.plan_points, m.plan_cells[(r > rh) & (r < rw)])
+    loaded = np.flatnonzero(weights)
+    weights = weights[loaded] / weights.sum()          # 1 N on the polygonal annulus
+    out = np.zeros((xyz.shape[0], 3))
     scale = 1e-9 * t
-    out = np.zeros((dofs.shape[0], 3))
     for face_z, sign in ((t, -1.0), (-t, 1.0)):
-        sel = f[in_annulus & (np.abs(mid[2] - face_z) < scale)]
-        fb = FacetBasis(mesh, basis.elem, facets=sel)
-
-        @LinearForm
-        def pressure(v, w, sign=sign):
-            return sign * v[2]
-
-        vec = asm(pressure, fb)
-        vec *= 1.0 / abs(vec.sum())            # 1 N resultant on the polygonal annulus
-        out += vec[dofs]
+        on_face = np.flatnonzero(np.abs(xyz[:, 2] - face_z) < scale)
+        dist, idx = cKDTree(xyz[on_face, :2]).query(m.plan_points[loaded])
+        if dist.max() > scale:
+            raise RuntimeError("a washer node is missing from the plate face")
+        out[on_face[idx], 2] += sign * weights
     return out
 
 
-def _node_area(tri_xy: np.ndarray, coords: np.ndarray) -> np.ndarray:
-    """Tributary area (N,) of the contact nodes at ``coords`` (N, 3): a third of each
-    adjacent interface triangle (corners ``tri_xy``, (m, 3, 2)), m²."""
-    _, idx = cKDTree(coords[:, :2]).query(tri_xy.reshape(-1, 2))
-    e1 = tri_xy[:, 1] - tri_xy[:, 0]
-    e2 = tri_xy[:, 2] - tri_xy[:, 0]
-    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-    out = np.zeros(coords.shape[0])
-    np.add.at(out, idx, np.repeat(area / 3, 3))
-    return out
+def _node_area(m: LapJointMesh, coords: np.ndarray) -> np.ndarray:
+    """Tributary area (N,) of the contact nodes at ``coords`` (N, 3): ∫ N_a dA over the
+    interface cells (a third of each triangle, the bilinear share of each quadrilateral),
+    m²."""
+    from slipcycle.fe.lap_joint_mesh import cell_weights
+
+    weights = cell_weights(m.plan_points, m.interface_cells)
+    _, idx = cKDTree(m.plan_points).query(coords[:, :2])
+    return weights[idx]
 
 
 def lap_joint_model(joint: LapJoint) -> LapJointModel:
@@ -389,20 +464,18 @@ def lap_joint_model(joint: LapJoint) -> LapJointModel:
     the equilibrium of the upper plate (its only supports are the grip and the stuck
     interface): F_grip = −Σ q (in plane) or −Σ p (out of plane).
     """
-    from skfem import Basis, ElementTetP1, ElementVector
-
-    from slipcycle.fe.contact3d import Case3D, mesh_nodes, node_dofs_3d, reduce_contact_3d
+    from slipcycle.fe.contact3d import Case3D, condense_contact_3d, reduce_contact_3d
 
     t0 = time.perf_counter()
     m = lap_joint_mesh(joint)
     t_mesh = time.perf_counter() - t0
-    mesh, element = m.mesh, joint.element
-    xyz = mesh_nodes(mesh, element)
+    element = joint.element
+    xyz = m.points.T
     x0, a, b, x1 = m.ranges
     tol = 1e-9 * joint.plate_length
-    # body of each node: the upper plate's vertices come first in the mesh
-    n_upper_vertices = int(m.mesh.t[:, m.element_body == 0].max()) + 1
-    body = (np.arange(mesh.p.shape[1]) >= n_upper_vertices).astype(int)
+    # body of each node: the upper plate's nodes come first in the mesh
+    n_upper = int(m.cells[:, m.element_body == 0].max()) + 1
+    body = (np.arange(xyz.shape[0]) >= n_upper).astype(int)
     on_plane = np.abs(xyz[:, 2]) < tol
     in_overlap = (xyz[:, 0] > a - tol) & (xyz[:, 0] < b + tol)
     c1 = np.flatnonzero(on_plane & in_overlap & (body == 0))
@@ -416,9 +489,7 @@ def lap_joint_model(joint: LapJoint) -> LapJointModel:
     grip_lower = np.abs(xyz[:, 0] - x0) < tol
     fixed = np.zeros_like(xyz, bool)
     fixed[grip_upper | grip_lower] = True
-    basis = Basis(mesh, ElementVector(ElementTetP1()))
-    dofs, _ = node_dofs_3d(basis)
-    cases = [Case3D(f"bolt_{k}", "N", force=_washer_forces(basis, mesh, joint, k, dofs),
+    cases = [Case3D(f"bolt_{k}", "N", force=_washer_forces(m, xyz, joint, k),
                     description=f"washer pressures of bolt {k}, 1 N")
              for k in range(joint.bolt_count)]
     services = (("service", 0), ("service_y", 1), ("service_z", 2))
@@ -427,11 +498,21 @@ def lap_joint_model(joint: LapJoint) -> LapJointModel:
         u[grip_upper, comp] = 1.0
         cases.append(Case3D(name, "m", displacement=u))
     t1 = time.perf_counter()
-    red = reduce_contact_3d(mesh, materials=[(joint.E, joint.nu)], pairs=pairs,
-                            normals=(0.0, 0.0, -1.0),
-                            tangents=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), fixed=fixed,
-                            cases=cases, element=element,
-                            source=f"slipcycle.fe lap_joint_model {joint!r}")
+    gap = joint.end_gap(xyz[pairs[:, 0], 0])
+    contact = dict(pairs=pairs, normals=(0.0, 0.0, -1.0), gap=gap,
+                   tangents=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), fixed=fixed, cases=cases,
+                   source=f"slipcycle.fe lap_joint_model {joint!r}")
+    if element == "H8I":
+        from slipcycle.fe.hex8i import hex8i_stiffness
+
+        def assemble():
+            return hex8i_stiffness(m.points, m.cells, joint.E, joint.nu), "H8I"
+
+        dofs = np.arange(3 * xyz.shape[0]).reshape(-1, 3)
+        red = condense_contact_3d(assemble, dofs, m.points, **contact)
+    else:
+        red = reduce_contact_3d(m.mesh, materials=[(joint.E, joint.nu)], element=element,
+                                **contact)
     t_reduce = time.perf_counter() - t1
     N = red.n_nodes
     loads = {}
@@ -446,26 +527,31 @@ def lap_joint_model(joint: LapJoint) -> LapJointModel:
         total = (-np.sum(case["q"][comp::2]) if comp < 2 else -np.sum(case["p"]))
         grip_stiffness[f"{name}_grip_stiffness_N_per_m"] = float(total)
         loads[name] = {"q": case["q"] / total, "p": case["p"] / total}
+    if joint.end_relief > 0:
+        loads["gap"] = red.loads["gap"]
     reduced = ReducedStiffness(A=red.A, B=red.B, C=red.C, tangential_dims=2,
                                nodes=red.nodes, coordinates=red.coordinates,
                                normals=red.normals, tangents=red.tangents, loads=loads,
                                source=red.source)
     coords = red.coordinates
     centres = joint.centres
-    tri_xy = m.plan_points[m.interface_triangles]
-    area = _node_area(tri_xy, coords)
+    area = _node_area(m, coords)
     region = np.argmin(np.linalg.norm(coords[:, None, :2] - centres[None], axis=-1),
                        axis=1)
+    spacing = float(np.sqrt(area.sum() / N))
     description = {
         "plate_length_m": joint.plate_length, "plate_width_m": joint.plate_width,
         "thickness_m": joint.thickness, "overlap_m": joint.overlap, "E_Pa": joint.E,
         "nu": joint.nu, "bolt_count": joint.bolt_count,
         "bolt_diameter_m": joint.bolt_diameter, "washer_diameter_m": joint.washer_diameter,
-        "mesh_size_m": joint.mesh_size, "element": element,
+        "end_relief_m": joint.end_relief, "end_relief_depth_m": joint.end_relief_depth,
+        "mesh_size_m": joint.mesh_size, "refine": joint.refine, "node_spacing_m": spacing,
+        "element": element,
         "layers": joint.layer_count, "contact_nodes": N, "dofs": 3 * xyz.shape[0],
-        "tetrahedra": int(mesh.t.shape[1]), "mesh_s": t_mesh, "reduction_s": t_reduce,
+        "elements": int(m.cells.shape[1]), "mesh_s": t_mesh, "reduction_s": t_reduce,
         **grip_stiffness,
     }
     return LapJointModel(reduced=reduced, node_area=area, bolt_region=region.astype(int),
-                         bolt_centres=centres, spacing=float(joint.mesh_size),
+                         bolt_centres=centres,
+                         spacing=spacing,
                          grip_share=grip_share, description=description)

@@ -21,7 +21,7 @@ finest value is then a discretisation effect, and its relative error is infinite
 Meshes that differ too little say nothing about the error: two pre-asymptotic meshes of
 nearly the same spacing can agree by chance. A sequence whose refinement ratios (between
 the meshes the estimate uses) fall below :data:`MIN_RATIO` = 1.3 (Celik et al. 2008) is
-never called converged; its order and extrapolation are still reported.
+never called converged and gets no order and no extrapolation.
 """
 
 from __future__ import annotations
@@ -223,11 +223,13 @@ def mesh_convergence(spacing: Sequence[float], values: Sequence[float], *,
     ratio = min(a / b for a, b in zip(used, used[1:], strict=False))
 
     def result(order, c, rel, converged, message):
-        if converged and ratio < MIN_RATIO * (1.0 - 1e-9):
-            converged = False
-            message = (f"NOT shown mesh-converged: the meshes are too close to estimate the "
-                       f"error (refinement ratio {ratio:.3g} < {MIN_RATIO:g}, Celik et al. "
-                       f"2008); {message.split(': ', 1)[-1]}")
+        if ratio < MIN_RATIO * (1.0 - 1e-9):
+            # an estimate from such meshes would look precise and mean nothing
+            return MeshConvergence(
+                h, f, None, None, None, False,
+                f"NOT shown mesh-converged: the meshes are too close to estimate the error "
+                f"(refinement ratio {ratio:.3g} < {MIN_RATIO:g}, Celik et al. 2008); values "
+                f"{_fmt(f)} {unit}; use meshes at least {MIN_RATIO:g} times apart", unit)
         return MeshConvergence(h, f, order, c, rel, bool(converged), message, unit)
 
     def verdict(rel: float) -> str:

@@ -14,7 +14,8 @@ meshes of ``[lap_joint.convergence]``, and runs the study
   ``reversed``, ``simultaneous``, or labels of ``orders``) and optional ``orders`` (per
   protocol a list of bolt numbers, or lists of numbers tightened together);
 - ``[lap_joint.convergence]``: ``coarsening`` (factors > 1 of the mesh size of extra,
-  coarser meshes; ``[]``: the case's mesh only), ``rtol``;
+  coarser meshes; ``[]``: the case's mesh only; with ``refine`` = k, a factor 2^j ≤ 2^k
+  removes j refinements, so the meshes are nested: :func:`coarser_joint`), ``rtol``;
 - ``[run]``: ``cycles``, ``steps_per_cycle``, ``steady_tol``, ``min_cycles``,
   ``step_tolerance``, ``replay`` (freeze the step subdivision once the slip pattern
   repeats, :func:`~slipcycle.discrete3d.steady.simulate3d`), ``difference_tol``;
@@ -26,6 +27,8 @@ from __future__ import annotations
 import dataclasses
 import typing
 from dataclasses import dataclass
+
+import numpy as np
 
 from slipcycle.errors import InputError
 from slipcycle.io import Case, CaseError, RunOutputs, Section
@@ -251,6 +254,16 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
                         tuple(fields))
 
 
+def coarser_joint(joint, factor: float):
+    """The joint on a mesh ``factor`` times coarser: with ``refine`` = k > 0 and factor
+    2^j (j ≤ k), the same mesh refined k − j times (nested meshes); otherwise a new mesh
+    of size ``factor`` × ``mesh_size``."""
+    j = round(np.log2(factor))
+    if joint.refine > 0 and 1 <= j <= joint.refine and abs(factor - 2.0 ** j) < 1e-9:
+        return dataclasses.replace(joint, refine=joint.refine - j)
+    return dataclasses.replace(joint, mesh_size=joint.mesh_size * factor)
+
+
 def joint_contact(joint) -> JointContact:
     """Reduce ``joint`` (:class:`slipcycle.fe.lap_joint.LapJoint`) to its contact nodes.
 
@@ -280,9 +293,18 @@ def solve_model(lc: LapJointCase, *, progress=None) -> LapJointResult:
     """
     if not isinstance(lc, LapJointCase):
         raise TypeError(f"expected a LapJointCase, not {type(lc).__name__}")
-    joints = [dataclasses.replace(lc.joint, mesh_size=lc.joint.mesh_size * f)
-              for f in lc.coarsening] + [lc.joint]
+    joints = [coarser_joint(lc.joint, f) for f in lc.coarsening] + [lc.joint]
     contacts = [joint_contact(j) for j in joints]
+    spacing = [c.spacing for c in contacts]
+    if any(b >= a * (1 - 1e-6) for a, b in zip(spacing, spacing[1:], strict=False)):
+        # the holes and washer circles set a smallest mesh: coarser requests can give the
+        # same mesh (or, unstructured, a finer one)
+        shown = ", ".join(f"{1e3 * h:.3g}" for h in spacing)
+        raise CaseError("lap_joint.convergence.coarsening",
+                        f"the meshes come out with node spacings {shown} mm (coarse → "
+                        "fine), not strictly decreasing: the holes and washers fix the "
+                        "coarsest mesh; use a smaller mesh_size or refine = 1 with "
+                        "coarsening = [2.0]")
     return lap_joint_study(contacts, lc.protocols, lc.settings, fields=lc.fields,
                            progress=progress)
 

@@ -46,14 +46,22 @@ def verdict(result) -> str:
                 f"tolerance is {100 * tol:.3g} %).")
     text += (" Steady-state class" + ("es: " if len(classes) > 1 else ": ")
              + ", ".join(classes) + ".")
-    # an unconverged sequence without an estimate (non-monotone) counts as unbounded
-    errors = [math.inf if x.relative_error is None else x.relative_error
-              for x in result.convergence if x is not None and not x.converged]
-    if errors:
+    errors = [x.relative_error for x in result.convergence
+              if x is not None and not x.converged]
+    if all(x is None for x in result.convergence):
+        text += (" **The dissipation is not checked for mesh convergence** (one mesh): "
+                 "compare the orders on this mesh only.")
+    elif any(e is None for e in errors):
+        # non-monotone values or meshes too close: there is no estimate to compare with
+        text += (" **But the dissipation is not shown mesh-converged** and its error is not "
+                 "known (see Mesh convergence): compare the orders on this mesh only.")
+    elif errors and not all(math.isfinite(e) for e in errors):
+        text += (" **But the dissipation vanishes under refinement** (it extrapolates to "
+                 "zero): on this mesh it is a discretisation effect, not physics.")
+    elif errors:
         worst = max(errors)
-        size = "∞" if not math.isfinite(worst) else f"{100 * worst:.3g} %"
         text += (f" **But the dissipation is not mesh-converged** (estimated relative error "
-                 f"up to {size})")
+                 f"up to {100 * worst:.3g} %)")
         text += (", larger than the spread between the orders: the mesh decides the "
                  "dissipation more than the tightening order does." if worst > spread
                  else ".")

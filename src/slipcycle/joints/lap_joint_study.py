@@ -280,6 +280,10 @@ def joint_load(contact: JointContact, preload: float, service_amplitude: float) 
                             q=np.asarray(red.loads["service"]["q"], float),
                             time=HarmonicLoad([0.0], [[float(service_amplitude)]],
                                               -np.pi / 2)))
+    if "gap" in red.loads:          # an initial gap (rounded plate ends): once, constant
+        cases.append(LoadCase3D(p=np.asarray(red.loads["gap"]["p"], float),
+                                q=np.asarray(red.loads["gap"]["q"], float),
+                                time=HarmonicLoad([1.0], [[0.0]], 0.0)))
     return Load3D(p=zero, q=zero_q, cases=tuple(cases))
 
 
@@ -289,11 +293,17 @@ def protocol_states(contact: JointContact, protocol: Protocol, preload: float
 
     The last step reaches the load at θ = 0 (every bolt at P, service zero), which the
     engine visits anyway; a protocol of one step (all bolts together) is plain loading
-    from the unloaded state (None).
+    from the unloaded state (None). A joint with an initial gap (load case ``gap``, the
+    rounded plate ends of :class:`~slipcycle.fe.lap_joint.LapJoint`) first opens it: the
+    gap's reactions are the first state, and every later state includes them.
     """
     protocol.check(contact.bolt_count)
     vec = [contact.case_vector(f"bolt_{k}") for k in range(contact.bolt_count)]
     states, total = [], np.zeros(3 * contact.n_nodes)
+    if "gap" in contact.reduced.loads:
+        # the initial gap first: its reactions open the gap g with every force zero
+        total = contact.case_vector("gap")
+        states.append(total.copy())
     for step in protocol.steps[:-1]:
         total = total + preload * sum(vec[b] for b in step)
         states.append(total.copy())
@@ -513,6 +523,9 @@ class LapJointResult(RunResult):
         if unconverged:
             lines.append("WARNING: dissipation not mesh-converged for "
                          + ", ".join(unconverged))
+        elif all(c is None for c in convergence):
+            lines.append("WARNING: dissipation not checked for mesh convergence (one mesh; "
+                         "[lap_joint.convergence] coarsening adds coarser ones)")
         return cls(steady_state=SteadyState(state), steady_state_detail=state,
                    dissipation_per_cycle=float(diss[0]),
                    cycles_run=max(int(r.cycles_run) for r in runs),
