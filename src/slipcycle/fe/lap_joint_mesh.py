@@ -222,6 +222,20 @@ def cell_weights(pts: np.ndarray, cells: np.ndarray, n: int | None = None) -> np
     return out
 
 
+def _levels(pts: np.ndarray, cells: np.ndarray, z: np.ndarray) -> tuple[np.ndarray,
+                                                                         np.ndarray]:
+    """The plan nodes used by ``cells`` copied to every level of ``z``: points (3,
+    n_used len(z)), level-major, and ``cells`` renumbered to the first level."""
+    used = np.unique(cells)
+    local = np.full(pts.shape[0], -1)
+    local[used] = np.arange(used.size)
+    n = used.size
+    p = np.empty((3, n * len(z)))
+    p[:2] = np.tile(pts[used].T, len(z))
+    p[2] = np.repeat(np.asarray(z, float), n)
+    return p, local[cells]
+
+
 def extrude_tets(pts: np.ndarray, tri: np.ndarray, z: np.ndarray) -> tuple[np.ndarray,
                                                                            np.ndarray]:
     """Extrude plan triangles through the levels ``z`` into positively oriented tetrahedra.
@@ -241,16 +255,9 @@ def extrude_tets(pts: np.ndarray, tri: np.ndarray, z: np.ndarray) -> tuple[np.nd
         Node coordinates, level-major (level 0 first), nodes in increasing plan number.
     tets : numpy.ndarray of int, shape (4, 3 m L)
     """
-    used = np.unique(tri)
-    local = np.full(pts.shape[0], -1)
-    local[used] = np.arange(used.size)
-    t = np.sort(local[tri], axis=1)          # the vertex-number rule needs sorted triangles
-    n = used.size
-    levels = len(z)
-    p = np.empty((3, n * levels))
-    for k, zk in enumerate(z):
-        p[:2, k * n:(k + 1) * n] = pts[used].T
-        p[2, k * n:(k + 1) * n] = zk
+    p, local = _levels(pts, tri, z)
+    t = np.sort(local, axis=1)               # the vertex-number rule needs sorted triangles
+    n, levels = p.shape[1] // len(z), len(z)
     tets = []
     for k in range(levels - 1):
         a, b, c = (t[:, j] + k * n for j in range(3))
@@ -286,16 +293,8 @@ def extrude_hexes(pts: np.ndarray, quads: np.ndarray, z: np.ndarray) -> tuple[np
         Vertices 0–3 the lower face counter-clockwise seen from +z, 4–7 the upper face
         in the same order (:func:`slipcycle.fe.hex8i.hex8i_stiffness`).
     """
-    used = np.unique(quads)
-    local = np.full(pts.shape[0], -1)
-    local[used] = np.arange(used.size)
-    q = local[quads]
-    n = used.size
-    levels = len(z)
-    p = np.empty((3, n * levels))
-    for k, zk in enumerate(z):
-        p[:2, k * n:(k + 1) * n] = pts[used].T
-        p[2, k * n:(k + 1) * n] = zk
+    p, q = _levels(pts, quads, z)
+    n, levels = p.shape[1] // len(z), len(z)
     hexes = np.hstack([np.vstack([q.T + k * n, q.T + (k + 1) * n])
                        for k in range(levels - 1)])
     return p, hexes
