@@ -152,3 +152,31 @@ def test_separated_nodes_condensed_out_give_the_steps_of_the_whole_active_block(
         seen |= set(a.modes.tolist())
         x, r = a.x, a.r
     assert {SLIP, SEPARATED} <= seen
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 10_000), budget=st.sampled_from([0, 10 ** 5, 2 ** 30]))
+def test_how_many_active_set_blocks_are_kept_never_changes_a_step(seed, budget):
+    """The blocks and factors kept per active set are exact functions of the set: a
+    solver that keeps none (budget 0 bytes) and one that keeps a whole cycle's worth
+    take bit-identical steps, through states that revisit earlier active sets."""
+    rng = np.random.default_rng(seed)
+    n = 12
+    system = _coupled_system(rng, n)
+    ref, probe = StepSolver(system, 1.0), StepSolver(system, 1.0, cache_bytes=budget)
+    # a periodic load path: the second period revisits the first period's active sets
+    base = np.concatenate([rng.normal(scale=0.3, size=(n, 2)).ravel(),
+                           np.where(rng.random(n) < 0.5, -0.3, 0.8)])
+    path = [np.cos(2 * np.pi * k / 6) * base for k in range(1, 13)]
+    x = np.zeros(3 * n)
+    r = np.zeros(3 * n)
+    xs, rs = x.copy(), r.copy()
+    previous = np.zeros(3 * n)
+    for load in path:
+        a = ref.solve(x, r, load - previous)
+        b = probe.solve(xs, rs, load - previous)
+        assert a is not None and b is not None
+        np.testing.assert_array_equal(a.x, b.x)
+        np.testing.assert_array_equal(a.modes, b.modes)
+        x, r, xs, rs, previous = a.x, a.r, b.x, b.r, load
+    assert probe._blocks.nbytes <= budget and probe._elims.nbytes <= budget

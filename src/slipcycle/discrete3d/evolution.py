@@ -70,6 +70,7 @@ a coarser step; the caller verifies a result obtained by replay with an adaptive
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -117,6 +118,47 @@ class Step:
     iterations: int
 
 
+def _nbytes(value) -> int:
+    if isinstance(value, np.ndarray):
+        return value.nbytes
+    if isinstance(value, tuple):
+        return sum(_nbytes(v) for v in value)
+    return 0
+
+
+class _Cache:
+    """Least-recently-used cache of arrays (or tuples of them), bounded in bytes.
+
+    The blocks and factors kept per active set are exact functions of the set, so how
+    many are kept changes the cost of a run, never its numbers. A steady cycle revisits
+    the same sets every cycle: keeping a whole cycle's worth saves their recomputation.
+    """
+
+    def __init__(self, max_bytes: int, max_entries: int = 4096):
+        self.max_bytes, self.max_entries = int(max_bytes), int(max_entries)
+        self._items: OrderedDict = OrderedDict()
+        self.nbytes = 0
+
+    def get(self, key):
+        item = self._items.get(key)
+        if item is None:
+            return None
+        self._items.move_to_end(key)
+        return item[0]
+
+    def put(self, key, value) -> None:
+        size = _nbytes(value)
+        if key in self._items:
+            self.nbytes -= self._items.pop(key)[1]
+        if size > self.max_bytes:
+            return
+        while self._items and (self.nbytes + size > self.max_bytes
+                               or len(self._items) >= self.max_entries):
+            self.nbytes -= self._items.popitem(last=False)[1][1]
+        self._items[key] = (value, size)
+        self.nbytes += size
+
+
 class StepSolver:
     """Semismooth Newton solver of the incremental problem of one load step.
 
@@ -133,6 +175,10 @@ class StepSolver:
         the cycle map is reproducible to about 1e-12 with the default).
     max_iter : int
         Newton iterations before the step is declared failed (the caller halves it).
+    cache_bytes : int, optional
+        Bound of each cache of per-active-set blocks and factors [bytes] (default
+        :attr:`cache_bytes`, and at most 8 × the bytes of K above 256 MiB); the steps do
+        not depend on it.
     """
 
     #: largest residual ratio of a chord step before the Newton matrix is refactorised
@@ -140,9 +186,12 @@ class StepSolver:
     #: condense the separated nodes' rows out of the Newton matrix once per active set
     #: (:meth:`_separated_block`); False: factorise the whole active block every time
     eliminate_separated = True
+    #: upper bound of each of the three per-active-set caches [bytes]
+    cache_bytes = 2 ** 30
 
     def __init__(self, system: FrictionalSystem3D, force_scale: float,
-                 rel_tol: float = 1e-13, max_iter: int = 60):
+                 rel_tol: float = 1e-13, max_iter: int = 60,
+                 cache_bytes: int | None = None):
         self.sys = system
         n = self.n = system.n_nodes
         self.K = np.ascontiguousarray(system.K)
@@ -157,11 +206,15 @@ class StepSolver:
         self.stats = {"solves": 0, "newton_iterations": 0, "failures": 0,
                       "factorisations": 0}
         self._rows_q = np.arange(2 * n).reshape(n, 2)
-        self._blocks: dict = {}
+        # exact per-set blocks and factors: a steady cycle's worth within a memory bound
+        limit = self.cache_bytes if cache_bytes is None else cache_bytes
+        budget = min(limit, max(2 ** 28, 8 * self.K.nbytes))
+        self._blocks = _Cache(budget)
+        self._elims = _Cache(budget)
+        self._chos = _Cache(budget)
+        # the chord-step factors change the Newton path (not the solution): few are kept
         self._max_blocks = 8
         self._lus: dict = {}
-        self._elims: dict = {}
-        self._chos: dict = {}
 
     def solve(self, x0: np.ndarray, r0: np.ndarray, drw: np.ndarray,
               guess: tuple | None = None) -> Step | None:
@@ -242,9 +295,7 @@ class StepSolver:
                                 np.column_stack([self._rows_q[P], 2 * n + P]).ravel()])
             V = np.concatenate([U, 2 * n + S])
             hit = (key, U, V, gather_block(self.K, V, U))
-            if len(self._blocks) >= self._max_blocks:
-                self._blocks.pop(next(iter(self._blocks)))
-            self._blocks[key] = hit
+            self._blocks.put(key, hit)
         return hit
 
     def _jacobian(self, KVU, ns, npp, phi, nvec, fS, rhoS, idx):
@@ -293,16 +344,12 @@ class StepSolver:
                     cho = cho_factor(KVU[s:m, s:m], lower=True, check_finite=False)
                 except LinAlgError:
                     return None
-                if len(self._chos) >= self._max_blocks:
-                    self._chos.pop(next(iter(self._chos)))
-                self._chos[key[1]] = cho
+                self._chos.put(key[1], cho)
             KSP = np.vstack([KVU[:s, s:m], KVU[m:, s:m]])
             W = cho_solve(cho, KVU[s:m, :s], check_finite=False)
             Kt = np.vstack([KVU[:s, :s], KVU[m:, :s]]) - KSP @ W
             hit = (cho, W, Kt, KSP)
-            if len(self._elims) >= self._max_blocks:
-                self._elims.pop(next(iter(self._elims)))
-            self._elims[key] = hit
+            self._elims.put(key, hit)
         return hit
 
     def _keep(self, key, lu) -> None:
