@@ -65,9 +65,42 @@ def verdict(result) -> str:
         text += (", larger than the spread between the orders: the mesh decides the "
                  "dissipation more than the tightening order does." if worst > spread
                  else ".")
+    text += _order_against_mesh(result, spread)
     if not result.converged:
         text += " Some protocols did not reach their steady state: raise `run.cycles`."
     return text
+
+
+def _rank_alike(d: np.ndarray, tol: float) -> bool:
+    """Every pair of protocols that differs on the finest mesh (last row of ``d``, mesh ×
+    protocol) by more than ``tol`` of its largest value differs with the same sign on
+    every mesh; closer pairs (e.g. mirror images) count as ties."""
+    fine = d[-1]
+    gap = fine[:, None] - fine[None, :]
+    apart = np.abs(gap) > tol * np.abs(fine).max()
+    return bool(all(np.all(np.sign(row[:, None] - row[None, :])[apart] == np.sign(gap)[apart])
+                    for row in d))
+
+
+def _order_against_mesh(result, spread: float) -> str:
+    """For mesh-converged orders that differ by less than the mesh error: whether the
+    orders rank the same on every mesh (the error is then common to them)."""
+    conv = [x for x in result.convergence if x is not None]
+    if not result.orders_differ or not conv or not all(x.converged for x in conv):
+        return ""
+    worst = max(x.relative_error for x in conv)
+    if worst <= spread:
+        return ""
+    d = np.asarray(result.mesh.dissipation, float)            # mesh × protocol
+    spreads = ", ".join(f"{100 * (row.max() - row.min()) / row.max():.3g} %" for row in d)
+    if _rank_alike(d, result.settings.difference_tol):
+        return (f" The spread is below the estimated mesh error of the dissipation (up to "
+                f"{100 * worst:.3g} %), but the orders rank the same on all {d.shape[0]} "
+                f"meshes (spreads {spreads}, coarse → fine): the mesh error is common to "
+                "them and their difference is resolved.")
+    return (f" The spread is below the estimated mesh error of the dissipation (up to "
+            f"{100 * worst:.3g} %) and the orders do not rank the same on every mesh "
+            f"(spreads {spreads}, coarse → fine): their difference is not resolved.")
 
 
 def report_markdown(result) -> str:
