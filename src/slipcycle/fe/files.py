@@ -10,7 +10,15 @@ from pathlib import Path
 
 import numpy as np
 
-from slipcycle.fe.model import build_problem, discrete_case_text, read_discrete_table
+from slipcycle.condensation import SingularModelError
+from slipcycle.errors import InputError
+from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_solid
+from slipcycle.fe.model import (
+    build_problem,
+    discrete3d_case_text,
+    discrete_case_text,
+    read_discrete_table,
+)
 from slipcycle.fe.reduction import reduce_problem
 from slipcycle.io import CaseError, read_case
 from slipcycle.io.matrices import StiffnessError, check_stiffness, read_reduced_stiffness
@@ -22,6 +30,20 @@ __all__ = ["import_stiffness", "reduce_model"]
 def _savez(path: Path, arrays: dict) -> None:
     with open(path, "wb") as fh:
         np.savez_compressed(fh, **arrays)
+
+
+def _stiffness_arrays(red, meta: dict) -> dict:
+    """The ``.npz`` arrays of a :class:`~slipcycle.io.matrices.ReducedStiffness`, with
+    its frames (normal into the body, as the 2-D reduction stores it) and ``metadata``."""
+    meta = {**meta, "source": red.source}
+    data = dict(red.to_arrays())
+    data["dof_order"] = np.array("tangential_first")
+    data["tangential_dims"] = np.array(red.tangential_dims)
+    if red.normals is not None and red.tangents is not None:
+        data["normal"] = -np.asarray(red.normals, float)
+        data["tangent"] = np.asarray(red.tangents, float)
+    data["metadata"] = np.array(json.dumps(meta))
+    return data
 
 
 def import_stiffness(model: Path, out: Path, dof_order: str | None = None) -> dict:
@@ -63,11 +85,7 @@ def import_stiffness(model: Path, out: Path, dof_order: str | None = None) -> di
         raise CaseError(model.name, str(exc)) from None
     meta = provenance("", model.resolve())
     meta["imported_from"] = str(model)
-    meta["source"] = red.source
-    data = dict(red.to_arrays())
-    data["dof_order"] = np.array("tangential_first")
-    data["tangential_dims"] = np.array(red.tangential_dims)
-    data["metadata"] = np.array(json.dumps(meta))
+    data = _stiffness_arrays(red, meta)
     write_together([(out, lambda tmp: _savez(tmp, data))])
     n = data["A"].shape[0]
     return {"n_contact_nodes": n, "imported_from": str(model),
@@ -104,6 +122,8 @@ def reduce_model(model: Path, out: Path, case_out: Path | None = None) -> dict:
     discrete = read_discrete_table(case.section("fe"))
     if case_out is not None and discrete is None:
         raise CaseError("fe.discrete", "required table is missing (needed for --case)")
+    if isinstance(problem, MeshSolid):
+        return _reduce_solid(case, problem, discrete, out, case_out)
     try:
         reduced = reduce_problem(problem)
     except ValueError as exc:
@@ -126,3 +146,32 @@ def reduce_model(model: Path, out: Path, case_out: Path | None = None) -> dict:
     info["load_cases"] = reduced.load_cases
     info["coupling_B_over_A"] = float(np.linalg.norm(reduced.B) / np.linalg.norm(reduced.A))
     return info
+
+
+def _reduce_solid(case, solid: MeshSolid, discrete: dict | None, out: Path,
+                  case_out: Path | None) -> dict:
+    """:func:`reduce_model` for a tetrahedral mesh file (a ``discrete3d`` case with --case)."""
+    try:  # the ReducedStiffness checks K symmetric positive definite on construction
+        red, area = reduce_mesh_solid(solid)
+    except StiffnessError as exc:
+        raise CaseError("fe", f"reduced stiffness {exc.problem}") from None
+    except InputError as exc:
+        where = {"clamped": "fe.mesh.clamped"}.get(exc.key, "fe.load_case")
+        raise CaseError(where, exc.problem) from None
+    except SingularModelError as exc:
+        raise CaseError("fe.mesh.clamped", f"the body is not held against rigid motion "
+                        f"with its contact nodes held ({exc}); clamp a surface or "
+                        "prescribe the displacement of one") from None
+    meta = provenance(case.text, case.path)
+    data = _stiffness_arrays(red, meta)
+    outputs = [(out, lambda tmp: _savez(tmp, data))]
+    if case_out is not None:
+        rel = os.path.relpath(out.resolve(), case_out.resolve().parent)
+        text = discrete3d_case_text(discrete, red, rel, area)
+        outputs.append((case_out, lambda tmp: tmp.write_text(text, encoding="utf-8")))
+    write_together(outputs)
+    n_dofs = 3 * (solid.mesh.p.shape[1] + (solid.mesh.edges.shape[1]
+                                           if solid.element == "P2" else 0))
+    return {"geometry": "mesh", "n_dofs": n_dofs, "n_contact_nodes": red.n_nodes,
+            "element": solid.element, "load_cases": list(red.loads),
+            "coupling_B_over_A": float(np.linalg.norm(red.B) / np.linalg.norm(red.A))}

@@ -17,17 +17,18 @@ from skfem import MeshTri
 from slipcycle.fe.geometry import Body
 from slipcycle.io.case import CaseError
 
-__all__ = ["read_mesh_body"]
+__all__ = ["read_mesh_body", "read_meshio", "is_solid_mesh", "cells_of_tag", "known_tags"]
 
 
-def _lines_of_tag(m, tag: str) -> np.ndarray | None:
-    """(2, k) vertex pairs of the line cells named ``tag``, or None if not found."""
+def cells_of_tag(m, tag: str, kind: str = "line", corners: int = 2) -> np.ndarray | None:
+    """(corners, k) corner vertices of the cells of type ``kind*`` named ``tag`` (a cell
+    set, a Gmsh physical name, or a physical number as a string), or None if none."""
     found = []
     sets = getattr(m, "cell_sets", None) or {}
     if tag in sets:
         for block, idx in zip(m.cells, sets[tag], strict=False):
-            if block.type.startswith("line") and idx is not None and len(idx):
-                found.append(block.data[np.asarray(idx, int), :2])
+            if block.type.startswith(kind) and idx is not None and len(idx):
+                found.append(block.data[np.asarray(idx, int), :corners])
         if found:
             return np.vstack(found).T
     phys = m.cell_data.get("gmsh:physical")
@@ -39,24 +40,40 @@ def _lines_of_tag(m, tag: str) -> np.ndarray | None:
             number = int(tag)
         if number is not None:
             for block, data in zip(m.cells, phys, strict=False):
-                if block.type.startswith("line"):
+                if block.type.startswith(kind):
                     sel = np.asarray(data) == number
                     if np.any(sel):
-                        found.append(block.data[sel, :2])
+                        found.append(block.data[sel, :corners])
             if found:
                 return np.vstack(found).T
     return None
 
 
-def _known_tags(m) -> list[str]:
+def known_tags(m, dim: int = 1) -> list[str]:
+    """Cell-set names and Gmsh physical names of dimension ``dim`` in ``m``."""
     names = set((getattr(m, "cell_sets", None) or {}).keys())
-    names |= {k for k, v in (m.field_data or {}).items() if len(v) > 1 and int(v[1]) == 1}
+    names |= {k for k, v in (m.field_data or {}).items() if len(v) > 1 and int(v[1]) == dim}
     return sorted(names)
+
+
+def read_meshio(path: str | Path, key: str):
+    """``meshio.read(path)``; any failure is a :class:`CaseError` naming ``key``."""
+    import meshio
+
+    try:
+        return meshio.read(str(path))
+    except Exception as exc:  # meshio raises many types
+        raise CaseError(key, f"cannot read mesh file {path}: {exc}") from None
+
+
+def is_solid_mesh(m) -> bool:
+    """Whether the meshio mesh ``m`` holds tetrahedra (a 3-D body)."""
+    return any(b.type in ("tetra", "tetra10") for b in m.cells)
 
 
 def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
                    name: str = "body", key: str = "fe.mesh.file",
-                   scale: float = 1.0) -> Body:
+                   scale: float = 1.0, data=None) -> Body:
     """Read a triangle mesh and name its boundaries.
 
     Triangles (``triangle`` or ``triangle6``; only the corner nodes are kept) make a
@@ -83,6 +100,8 @@ def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
         Case-file key the errors name (a tag error names ``<table of key>.<boundary>``).
     scale : float
         Factor applied to the coordinates to give metres (e.g. 1e-3 for a file in mm).
+    data : meshio.Mesh, optional
+        The file already read (:func:`read_meshio`); read from ``path`` if None.
 
     Returns
     -------
@@ -96,12 +115,7 @@ def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
         Unreadable file, no triangles, a mesh that is not planar, a tag that names no
         line cells, or a line that is not an edge of the triangles.
     """
-    import meshio
-
-    try:
-        m = meshio.read(str(path))
-    except Exception as exc:  # meshio raises many types
-        raise CaseError(key, f"cannot read mesh file {path}: {exc}") from None
+    m = read_meshio(path, key) if data is None else data
     tri = [b.data[:, :3] for b in m.cells if b.type in ("triangle", "triangle6")]
     if not tri:
         raise CaseError(key, f"mesh file {path} holds no triangles "
@@ -121,11 +135,11 @@ def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
         facet_of[(min(a, b), max(a, b))] = k
     boundaries = {}
     for our, theirs in tags.items():
-        lines = _lines_of_tag(m, str(theirs))
+        lines = cells_of_tag(m, str(theirs))
         if lines is None:
             raise CaseError(key.rsplit(".", 1)[0] + f".{our}",
                             f"boundary tag {theirs!r} not found in {Path(path).name} "
-                            f"(line tags present: {', '.join(_known_tags(m)) or 'none'})")
+                            f"(line tags present: {', '.join(known_tags(m)) or 'none'})")
         lines = renumber[lines]
         idx = []
         for a, b in lines.T:

@@ -18,6 +18,7 @@ from slipcycle.errors import InputError
 from slipcycle.fe import builders
 from slipcycle.fe.geometry import Grid, Material, Solid
 from slipcycle.fe.loads import combined_loads
+from slipcycle.fe.meshfile3d import MeshSolid
 from slipcycle.fe.reduction import Problem, ReducedModel
 from slipcycle.io.case import Case, CaseError, Section
 
@@ -50,8 +51,13 @@ def _body(sec: Section) -> dict:
     return _make(sec, Solid, height=height, **mat).as_dict()
 
 
-def build_problem(case: Case) -> Problem:
-    """Validate the ``[fe]`` table of ``case`` and assemble the problem."""
+def build_problem(case: Case) -> Problem | MeshSolid:
+    """Validate the ``[fe]`` table of ``case`` and assemble the problem.
+
+    A 2-D model gives the assembled :class:`~slipcycle.fe.reduction.Problem`; a mesh file
+    of tetrahedra gives the :class:`~slipcycle.fe.meshfile3d.MeshSolid` to reduce with
+    :func:`~slipcycle.fe.meshfile3d.reduce_mesh_solid`.
+    """
     fe = case.section("fe")
     geometry = fe.string("geometry", choices=GEOMETRIES)
     common = {
@@ -105,20 +111,11 @@ def build_problem(case: Case) -> Problem:
                                **grid, **common)
 
 
-def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem:
-    from slipcycle.fe.meshfile import read_mesh_body
-
-    ms = fe.table("mesh")
-    path = ms.path("file")
-    contact = ms.string("contact")
-    raw = ms._get("clamped", [])  # a list of strings: no typed accessor in Section
-    if not isinstance(raw, list) or not all(isinstance(t, str) for t in raw):
-        raise ms.error("clamped", "must be a list of boundary tag names")
-    normal = ms.array("normal", [0.0, 1.0], shape=(2,))
-    if np.linalg.norm(normal) == 0:
-        raise ms.error("normal", "must be a non-zero vector")
-    scale = ms.float("scale", 1.0, gt=0)
-    mat = _material(ms)
+def _load_specs(fe: Section, dims: int) -> list[dict]:
+    """The ``[[fe.load_case]]`` tables of a mesh-file model (``dims`` components)."""
+    axes = "xyz"[:dims]
+    t_text = "[" + ", ".join(f"t{a}" for a in axes) + "]"
+    u_text = "[" + ", ".join(f"u{a}" for a in axes) + "]"
     loads = []
     for sec in fe.tables("load_case", []):
         name = sec.string("name")
@@ -127,20 +124,56 @@ def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem:
         spec = {"name": name, "boundary": sec.string("boundary")}
         has_t, has_u = sec.has("traction"), sec.has("displacement")
         if has_t == has_u:
-            raise sec.error("traction", "give exactly one of traction = [tx, ty] (Pa) "
-                                        "or displacement = [ux, uy] (m)")
+            raise sec.error("traction", f"give exactly one of traction = {t_text} (Pa) "
+                                        f"or displacement = {u_text} (m)")
         if has_t:
-            spec["traction"] = tuple(sec.array("traction", shape=(2,)))
+            spec["traction"] = tuple(sec.array("traction", shape=(dims,)))
         else:
-            spec["displacement"] = tuple(sec.array("displacement", shape=(2,)))
+            spec["displacement"] = tuple(sec.array("displacement", shape=(dims,)))
         sec.finish()
         loads.append(spec)
+    return loads
+
+
+def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem | MeshSolid:
+    from slipcycle.fe.meshfile import is_solid_mesh, read_mesh_body, read_meshio
+
+    ms = fe.table("mesh")
+    path = ms.path("file")
+    data = read_meshio(path, ms.key("file"))
+    solid = is_solid_mesh(data)
+    if solid and fe.has("thickness"):
+        raise fe.error("thickness", "not used with a 3-D (tetrahedral) mesh file")
+    dims = 3 if solid else 2
+    contact = ms.string("contact")
+    raw = ms._get("clamped", [])  # a list of strings: no typed accessor in Section
+    if not isinstance(raw, list) or not all(isinstance(t, str) for t in raw):
+        raise ms.error("clamped", "must be a list of boundary tag names")
+    normal = ms.array("normal", [0.0, 0.0, 1.0][-dims:], shape=(dims,))
+    if np.linalg.norm(normal) == 0:
+        raise ms.error("normal", "must be a non-zero vector")
+    scale = ms.float("scale", 1.0, gt=0)
+    mat = _material(ms)
+    loads = _load_specs(fe, dims)
     ms.finish()
     case.finish()
     tags = {"contact": contact}
     tags.update({t: t for t in raw})
     tags.update({d["boundary"]: d["boundary"] for d in loads})
-    body = read_mesh_body(path, tags, mat["E"], mat["nu"], key=ms.key("file"), scale=scale)
+    if solid:
+        from slipcycle.fe.meshfile3d import read_mesh_solid
+
+        mesh, surfaces = read_mesh_solid(path, tags, key=ms.key("file"), scale=scale,
+                                         data=data)
+        return MeshSolid(mesh, surfaces, mat["E"], mat["nu"],
+                         normal / np.linalg.norm(normal), tuple(raw), tuple(loads),
+                         common["element"], common["formulation"],
+                         {"geometry": "mesh", "file": str(path), "E": mat["E"],
+                          "nu": mat["nu"], "element": common["element"],
+                          "formulation": common["formulation"],
+                          "normal": [float(v) for v in normal]})
+    body = read_mesh_body(path, tags, mat["E"], mat["nu"], key=ms.key("file"), scale=scale,
+                          data=data)
     return builders.from_mesh(body, contact="contact", normal=normal, clamped=tuple(raw),
                               loads=loads, **common)
 
@@ -237,4 +270,48 @@ def discrete_case_text(table: dict, reduced: ReducedModel, stiffness_file: str,
         f"cycles = {table['cycles']}",
         f"steps_per_cycle = {table['steps_per_cycle']}",
     ]
+    return "\n".join(lines) + "\n"
+
+
+def discrete3d_case_text(table: dict, reduced, stiffness_file: str, area=None,
+                         key: str = "fe.discrete") -> str:
+    """A ``discrete3d`` case file (docs/discrete3d.md) of a reduced 3-D model.
+
+    Each basic load case of the stiffness file enters as a ``[[loading.load_case]]`` with
+    ``file_case`` and the time function mean_c + λ amplitude_c cos(θ + phase_c) of
+    ``[fe.discrete]`` (the gap case with mean 1 unless set), the same combination as
+    :func:`discrete_case_text` writes out node by node in 2-D. ``area`` (N,), m², the
+    tributary areas of the nodes, is written when given.
+    """
+    names = list(reduced.loads)
+    for part in ("mean", "amplitude", "phase"):
+        for k in table[part]:
+            if k not in names:
+                raise CaseError(f"{key}.{part}.{k}", f"unknown load case; the model has "
+                                f"{', '.join(names)}")
+    lines = [
+        "# written by `slipcycle reduce`: discrete 3-D model of the reduced "
+        "finite-element model",
+        'model = "discrete3d"',
+        "[discrete3d]",
+        f'stiffness_file = "{stiffness_file}"',
+        f"friction = {table['friction']:.12g}",
+    ]
+    if area is not None:
+        lines.append("area = [" + ", ".join(f"{a:.12g}" for a in area) + "]")
+    lines += [
+        "[loading]",
+        f"lam = {table['lam']:.12g}",
+        "p0 = 0.0",
+    ]
+    for name in names:
+        mean = table["mean"].get(name, 1.0 if name == "gap" else 0.0)
+        amplitude = table["amplitude"].get(name, 0.0)
+        if mean == 0.0 and amplitude == 0.0:
+            continue
+        lines += ["[[loading.load_case]]", f'file_case = "{name}"', f"mean = {mean:.12g}",
+                  f"amplitude = {amplitude:.12g}",
+                  f"phase = {table['phase'].get(name, 0.0):.12g}"]
+    lines += ["[run]", f"cycles = {table['cycles']}",
+              f"steps_per_cycle = {table['steps_per_cycle']}"]
     return "\n".join(lines) + "\n"

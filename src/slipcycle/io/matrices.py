@@ -547,6 +547,12 @@ def _from_blocks(raw: RawMatrix, tangential_dims: int | None, where: str) -> dic
         if xy.ndim == 2 and xy.shape[0] == n and xy.shape[1] in (2, 3):
             coords = np.pad(xy, ((0, 0), (0, 3 - xy.shape[1])))
     normals = tangents = None
+    if "normal" in raw.extra and "tangent" in raw.extra and t == 2:
+        # per-node frames of slipcycle's 3-D reduction, normal stored into the body
+        e = np.asarray(raw.extra["normal"], float)
+        tg = np.asarray(raw.extra["tangent"], float)
+        if e.shape == (n, 3) and tg.shape == (n, 2, 3):
+            normals, tangents = -e, tg
     if "normal" in raw.extra and "tangent" in raw.extra and t == 1:
         # slipcycle's FE reduction stores the normal pointing into the body (fe.contact)
         e = np.pad(np.asarray(raw.extra["normal"], float).ravel(), (0, 1))[:3]

@@ -39,6 +39,7 @@ from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
 from slipcycle.errors import InputError
 from slipcycle.fe.loads import combined_loads
+from slipcycle.fe.meshfile3d import MeshSolid
 from slipcycle.fe.model import build_problem, read_convergence_table, read_discrete_table
 from slipcycle.fe.reduction import Problem, reduce_problem
 from slipcycle.io import Case, CaseError, RunOutputs
@@ -161,6 +162,10 @@ def read_fe_case(case: Case) -> FECase:
                                    "reduced model under its [fe.discrete] loads (`slipcycle "
                                    "reduce` writes the reduced model without them)")
     problem = build_problem(case)  # every key of [fe], [fe.discrete], [fe.convergence]
+    if isinstance(problem, MeshSolid):
+        raise CaseError("fe.mesh.file", "a tetrahedral (3-D) mesh is reduced by `slipcycle "
+                        "reduce MODEL --out model.npz --case case.toml`, whose discrete3d "
+                        "case `slipcycle run case.toml` then solves")
     geometry = fe.string("geometry")
     conv = read_convergence_table(fe, geometry)
     table = read_discrete_table(fe)

@@ -1,0 +1,293 @@
+"""Three-dimensional bodies from mesh files, reduced on a rigid flat (``slipcycle reduce``).
+
+The file (any format meshio reads: Gmsh ``.msh``, ``.vtu``, ``.xdmf``, Abaqus ``.inp``,
+...) must hold tetrahedra (``tetra`` or ``tetra10``; only the corner nodes are used,
+scikit-fem adds its own mid-points for P2) and triangles (``triangle`` or ``triangle6``)
+that carry the named surfaces. Surfaces are named as boundaries are in 2-D
+(:mod:`slipcycle.fe.meshfile`): a cell set, a Gmsh physical group of dimension 2, or a
+physical number as a string. Each triangle of a named surface must be a face of the
+tetrahedra.
+
+The body rests on a rigid flat perpendicular to ``normal`` (the unit normal of the flat
+pointing into the body) through the contact node lowest along it; the other contact nodes
+start at the gap g_j = n·(x_j − x_lowest). Contact pairs are node-to-rigid-flat, so the
+contact model is exact node-to-node for a conforming counter-surface (Wriggers 2006,
+§4.1). The reduction itself is :func:`slipcycle.fe.contact3d.reduce_contact_3d`.
+
+References
+----------
+Wriggers, P. (2006). Computational Contact Mechanics, 2nd ed., Springer.
+Gustafsson, T. & McBain, G. D. (2020). scikit-fem: A Python package for finite element
+assembly. J. Open Source Softw. 5(52), 2369.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from skfem import Basis, ElementVector, FacetBasis, LinearForm, MeshTet, asm
+
+from slipcycle.errors import InputError
+from slipcycle.fe.contact3d import ELEMENTS_3D, Case3D, node_dofs_3d, reduce_contact_3d
+from slipcycle.fe.meshfile import cells_of_tag, known_tags, read_meshio
+from slipcycle.io.case import CaseError
+from slipcycle.io.matrices import ReducedStiffness
+
+__all__ = ["MeshSolid", "node_areas", "read_mesh_solid", "reduce_mesh_solid"]
+
+#: node numbers must stay below this for the int64 keys of faces (n³ < 2⁶³)
+_MAX_NODES = 2_000_000
+
+
+@dataclass(frozen=True, eq=False)
+class MeshSolid:
+    """A tetrahedral body read from a file, with its named surfaces and its loads.
+
+    Attributes
+    ----------
+    mesh : skfem.MeshTet
+        Coordinates in m.
+    surfaces : dict of str to numpy.ndarray of int
+        Name used by slipcycle (``"contact"``, a clamped or loaded surface) → indices into
+        ``mesh.facets``.
+    E, nu : float
+        Young's modulus (Pa) and Poisson's ratio.
+    normal : numpy.ndarray, shape (3,)
+        Unit normal of the rigid flat, pointing into the body.
+    clamped : tuple of str
+        Surfaces held at u = 0 in every case.
+    loads : tuple of dict
+        Basic load cases ``{"name", "boundary", "traction": (tx, ty, tz)}`` (per unit of
+        that traction, Pa) or ``{"name", "boundary", "displacement": (ux, uy, uz)}`` (m; the
+        surface is held in every other case).
+    element, formulation : str
+        ``"P1"``/``"P2"`` and ``"auto"``/``"displacement"``/``"mixed"``.
+    info : dict
+        ``file`` and anything else for the metadata.
+    """
+
+    mesh: MeshTet
+    surfaces: dict
+    E: float
+    nu: float
+    normal: np.ndarray
+    clamped: tuple = ()
+    loads: tuple = ()
+    element: str = "P2"
+    formulation: str = "auto"
+    info: dict = field(default_factory=dict)
+
+
+def _face_keys(tri: np.ndarray, n: int) -> np.ndarray:
+    """One int64 per triangle (3, k) of vertex numbers < n, independent of their order."""
+    s = np.sort(tri, axis=0).astype(np.int64)
+    return (s[0] * n + s[1]) * n + s[2]
+
+
+def read_mesh_solid(path: str | Path, tags: dict[str, str], *, key: str = "fe.mesh.file",
+                    scale: float = 1.0, data=None) -> tuple[MeshTet, dict]:
+    """Read a tetrahedral mesh and name its surfaces.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Mesh file in any format meshio reads.
+    tags : dict of str to str
+        Surface name used by slipcycle → tag in the file (module docstring).
+    key : str
+        Case-file key the errors name (a tag error names ``<table of key>.<surface>``).
+    scale : float
+        Factor applied to the coordinates to give metres (e.g. 1e-3 for a file in mm).
+    data : meshio.Mesh, optional
+        The file already read; read from ``path`` if None.
+
+    Returns
+    -------
+    mesh : skfem.MeshTet
+        Positively oriented tetrahedra on the used nodes, m.
+    surfaces : dict of str to numpy.ndarray of int
+        Indices into ``mesh.facets``, one array per key of ``tags``.
+
+    Raises
+    ------
+    CaseError
+        Unreadable file, no tetrahedra, degenerate tetrahedra, a tag that names no
+        triangles, or a triangle that is not a face of the tetrahedra.
+    """
+    m = read_meshio(path, key) if data is None else data
+    tets = [b.data[:, :4] for b in m.cells if b.type in ("tetra", "tetra10")]
+    if not tets:
+        raise CaseError(key, f"mesh file {path} holds no tetrahedra "
+                        f"(cell types: {', '.join(b.type for b in m.cells)})")
+    t = np.vstack(tets)
+    used = np.unique(t)
+    if used.size >= _MAX_NODES:
+        raise CaseError(key, f"mesh file {path} has {used.size} nodes; at most "
+                             f"{_MAX_NODES - 1}")
+    renumber = np.full(len(m.points), -1)
+    renumber[used] = np.arange(used.size)
+    pts = np.asarray(m.points, float)
+    if pts.shape[1] != 3:
+        raise CaseError(key, f"mesh file {path} has {pts.shape[1]}-D points; need x, y, z")
+    p = pts[used].T * scale
+    t = renumber[t].T
+    e1, e2, e3 = (p[:, t[j]] - p[:, t[0]] for j in (1, 2, 3))
+    vol = np.einsum("ij,ij->j", e1, np.cross(e2, e3, axis=0))
+    flat = np.abs(vol) <= 1e-12 * np.abs(vol).max()
+    if np.any(flat):
+        raise CaseError(key, f"mesh file {path} has {int(flat.sum())} degenerate (flat) "
+                             "tetrahedra")
+    neg = vol < 0
+    t[1, neg], t[2, neg] = t[2, neg].copy(), t[1, neg].copy()
+    mesh = MeshTet(np.ascontiguousarray(p), np.ascontiguousarray(t))
+    n = p.shape[1]
+    fkeys = _face_keys(mesh.facets, n)
+    order = np.argsort(fkeys)
+    surfaces = {}
+    where = key.rsplit(".", 1)[0]
+    for ours, theirs in tags.items():
+        tri = cells_of_tag(m, str(theirs), kind="triangle", corners=3)
+        if tri is None:
+            raise CaseError(f"{where}.{ours}",
+                            f"surface tag {theirs!r} not found in {Path(path).name} "
+                            f"(surface tags present: {', '.join(known_tags(m, 2)) or 'none'})")
+        tri = renumber[tri]
+        if np.any(tri < 0):
+            raise CaseError(f"{where}.{ours}", f"a triangle of tag {theirs!r} is not a face "
+                                               "of the tetrahedra")
+        k = _face_keys(tri, n)
+        pos = np.searchsorted(fkeys, k, sorter=order)
+        pos = np.minimum(pos, len(order) - 1)
+        idx = order[pos]
+        if np.any(fkeys[idx] != k):
+            raise CaseError(f"{where}.{ours}", f"{int(np.sum(fkeys[idx] != k))} triangle(s) "
+                            f"of tag {theirs!r} are not faces of the tetrahedra")
+        surfaces[ours] = np.unique(idx)
+    return mesh, surfaces
+
+
+def _surface_nodes(basis: Basis, dofs: np.ndarray, facets: np.ndarray) -> np.ndarray:
+    """Rows of ``dofs`` (the nodes of :func:`~slipcycle.fe.contact3d.mesh_nodes`) on
+    ``facets``: their vertices and, for P2, the mid-points of their edges."""
+    on = basis.get_dofs(facets=np.asarray(facets)).all()
+    return np.flatnonzero(np.isin(dofs[:, 0], on))
+
+
+def _traction_forces(basis: Basis, dofs: np.ndarray, facets: np.ndarray,
+                     traction) -> np.ndarray:
+    """Consistent nodal forces (n_nodes, 3), N, of a uniform traction (Pa) on ``facets``."""
+    fb = FacetBasis(basis.mesh, basis.elem, facets=np.asarray(facets))
+    tx, ty, tz = (float(v) for v in traction)
+
+    @LinearForm
+    def load(v, w):
+        return tx * v[0] + ty * v[1] + tz * v[2]
+
+    return asm(load, fb)[dofs]
+
+
+def node_areas(mesh: MeshTet, facets: np.ndarray, element: str) -> np.ndarray:
+    """Tributary area (m²) of every node of :func:`~slipcycle.fe.contact3d.mesh_nodes` on
+    the triangles ``facets`` (zero elsewhere): a third of each triangle to its vertices
+    (P1); for P2 a third of each of the four sub-triangles the mid-points cut, so A/12 to
+    each vertex and A/4 to each mid-point. They sum to the area of the surface."""
+    f = mesh.facets[:, np.asarray(facets)]
+    a = 0.5 * np.linalg.norm(np.cross(mesh.p[:, f[1]] - mesh.p[:, f[0]],
+                                      mesh.p[:, f[2]] - mesh.p[:, f[0]], axis=0), axis=0)
+    nv = mesh.p.shape[1]
+    n_nodes = nv + (mesh.edges.shape[1] if element == "P2" else 0)
+    out = np.zeros(n_nodes)
+    if element == "P1":
+        for j in range(3):
+            np.add.at(out, f[j], a / 3.0)
+        return out
+    for j in range(3):
+        np.add.at(out, f[j], a / 12.0)
+    ekeys = np.sort(mesh.edges, axis=0).astype(np.int64)
+    ekeys = ekeys[0] * nv + ekeys[1]
+    order = np.argsort(ekeys)
+    for i, j in ((0, 1), (1, 2), (0, 2)):
+        lo, hi = np.minimum(f[i], f[j]), np.maximum(f[i], f[j])
+        edge = order[np.searchsorted(ekeys, lo.astype(np.int64) * nv + hi, sorter=order)]
+        np.add.at(out, nv + edge, a / 4.0)
+    return out
+
+
+def reduce_mesh_solid(solid: MeshSolid, contact: str = "contact"
+                      ) -> tuple[ReducedStiffness, np.ndarray]:
+    """Reduce a :class:`MeshSolid` on its rigid flat to the contact nodes.
+
+    Parameters
+    ----------
+    solid : MeshSolid
+    contact : str
+        Name of the surface whose nodes are the contact candidates.
+
+    Returns
+    -------
+    reduced : ReducedStiffness
+        A (2N, 2N), B (N, 2N), C (N, N) (N/m), ``tangential_dims`` 2, node coordinates
+        (N, 3) (m; nodes ordered by z, then y, then x), outward normals −n, tangents t1 =
+        x projected on the flat (y where n is nearly along x) and t2 completing the
+        right-handed frame (:func:`~slipcycle.io.fe_formats.dofmap.node_frames`), and
+        the load cases of ``solid.loads`` then ``gap`` (N per unit of each case).
+    area : numpy.ndarray, shape (N,)
+        Tributary area of each contact node (:func:`node_areas`), m².
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        A contact node that is also clamped or displacement-loaded (key ``clamped`` or the
+        case's name), or a surface without nodes.
+    slipcycle.condensation.SingularModelError
+        The body is not held against rigid motion with the contact nodes held.
+    """
+    if solid.element not in ELEMENTS_3D:
+        raise InputError("element", f"must be one of {', '.join(ELEMENTS_3D)}, got "
+                         f"{solid.element!r}")
+    basis = Basis(solid.mesh, ElementVector(ELEMENTS_3D[solid.element]()))
+    dofs, xyz = node_dofs_3d(basis)
+    n = np.asarray(solid.normal, float)
+    n = n / np.linalg.norm(n)
+    cnodes = _surface_nodes(basis, dofs, solid.surfaces[contact])
+    cnodes = cnodes[np.lexsort((xyz[0, cnodes], xyz[1, cnodes], xyz[2, cnodes]))]
+    height = n @ xyz[:, cnodes]
+    gap = height - height.min()
+    fixed = np.zeros((xyz.shape[1], 3), bool)
+    for name in solid.clamped:
+        fixed[_surface_nodes(basis, dofs, solid.surfaces[name])] = True
+    if np.any(fixed[cnodes]):
+        raise InputError("clamped", f"{int(np.sum(fixed[cnodes].any(axis=1)))} contact "
+                         "node(s) lie on a clamped surface; a contact node must be free")
+    moved = {}
+    for spec in solid.loads:
+        if "displacement" in spec and spec["boundary"] not in moved:
+            nodes = _surface_nodes(basis, dofs, solid.surfaces[spec["boundary"]])
+            if np.any(np.isin(nodes, cnodes)):
+                raise InputError(spec["name"], f"surface {spec['boundary']!r} shares nodes "
+                                 "with the contact surface; a contact node must be free")
+            moved[spec["boundary"]] = nodes
+            fixed[nodes] = True
+    cases = []
+    for spec in solid.loads:
+        if "traction" in spec:
+            f = _traction_forces(basis, dofs, solid.surfaces[spec["boundary"]],
+                                 spec["traction"])
+            cases.append(Case3D(spec["name"], "Pa", force=f, description=(
+                f"traction {tuple(spec['traction'])} Pa on {spec['boundary']!r}")))
+        else:
+            u = np.zeros((xyz.shape[1], 3))
+            u[moved[spec["boundary"]]] = spec["displacement"]
+            cases.append(Case3D(spec["name"], "m", displacement=u, description=(
+                f"displacement {tuple(spec['displacement'])} m of {spec['boundary']!r}")))
+    pairs = np.column_stack([cnodes, np.full(cnodes.size, -1)])
+    source = (f"slipcycle.fe.meshfile3d {solid.info.get('file', '')}: "
+              f"{solid.mesh.t.shape[1]} tetrahedra, {3 * xyz.shape[1]} dofs")
+    red = reduce_contact_3d(solid.mesh, materials=[(solid.E, solid.nu)], pairs=pairs,
+                            normals=-n, fixed=fixed, gap=gap, cases=cases,
+                            element=solid.element, formulation=solid.formulation,
+                            source=source)
+    area = node_areas(solid.mesh, solid.surfaces[contact], solid.element)[cnodes]
+    return red, area

@@ -1,0 +1,253 @@
+"""Three-dimensional bodies read from mesh files (``slipcycle.fe.meshfile3d``).
+
+Specification:
+- a tetrahedral mesh written to a Gmsh file with physical surfaces reduces to the same
+  A, B, C and load cases as the generated block reduced directly (one engine:
+  ``reduce_contact_3d``), P1 and P2;
+- a uniform traction's consistent nodal forces have its resultant and its moment (P1,
+  P2);
+- the initial gap of a tilted contact surface is its height along the flat's normal above
+  the lowest contact node (recovered exactly from the ``gap`` case, p = −C g);
+- the tributary areas of the contact nodes sum to the contact area;
+- ``slipcycle reduce`` writes the reduced model and a discrete3d case that
+  ``slipcycle run`` and ``slipcycle.run`` solve to the same dissipation;
+- every mistake in the model file ends in one line naming the key, exit code 2, and no
+  output left behind.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+meshio = pytest.importorskip("meshio")
+
+from skfem import MeshTet  # noqa: E402
+
+from slipcycle.fe.meshfile3d import MeshSolid, node_areas, read_mesh_solid, reduce_mesh_solid  # noqa: E402
+from slipcycle.fe.solid3d import TOP_CASES, reduce_on_rigid_flat  # noqa: E402
+
+E, NU = 210e9, 0.3
+LX, LY, H = 0.02, 0.01, 0.008
+
+
+def box(nx=4, ny=3, nz=2, tilt=0.0) -> MeshTet:
+    """A box [0, LX] × [0, LY] × [0, H] of tetrahedra; ``tilt`` lifts the base z = tilt·x
+    (the top stays flat)."""
+    m = MeshTet.init_tensor(np.linspace(0, LX, nx + 1), np.linspace(0, LY, ny + 1),
+                            np.linspace(0, H, nz + 1))
+    p = m.p.copy()
+    p[2] += tilt * p[0] * (1 - p[2] / H)
+    return MeshTet(p, m.t)
+
+
+def faces_on(mesh: MeshTet, where) -> np.ndarray:
+    """(k, 3) vertex triples of the boundary faces whose centroids satisfy ``where``."""
+    f = mesh.facets[:, mesh.boundary_facets()]
+    c = mesh.p[:, f].mean(axis=1)
+    return f[:, where(c)].T
+
+
+def write_msh(path, mesh: MeshTet, surfaces: dict) -> None:
+    """The mesh as a Gmsh 2.2 file: physical volume 99 "body", one physical surface per
+    entry of ``surfaces`` (name → (k, 3) triangles), numbered 1, 2, ..."""
+    cells, phys = [("tetra", mesh.t.T)], [np.full(mesh.t.shape[1], 99)]
+    field = {"body": np.array([99, 3])}
+    for k, (name, tri) in enumerate(surfaces.items(), start=1):
+        cells.append(("triangle", tri))
+        phys.append(np.full(len(tri), k))
+        field[name] = np.array([k, 2])
+    meshio.write(path, meshio.Mesh(mesh.p.T, cells, cell_data={
+        "gmsh:physical": phys, "gmsh:geometrical": phys}, field_data=field),
+        file_format="gmsh22", binary=False)
+
+
+@pytest.mark.parametrize("element", ["P1", "P2"])
+def test_mesh_file_reduction_equals_the_generated_block(tmp_path, element):
+    mesh = box()
+    ref = reduce_on_rigid_flat(mesh, E=E, nu=NU, element=element,
+                               contact=lambda x: np.abs(x[2]) < 1e-12,
+                               top=lambda x: np.abs(x[2] - H) < 1e-12)
+    write_msh(tmp_path / "box.msh", mesh, {
+        "base": faces_on(mesh, lambda c: np.abs(c[2]) < 1e-12),
+        "top": faces_on(mesh, lambda c: np.abs(c[2] - H) < 1e-12)})
+    read, surfaces = read_mesh_solid(tmp_path / "box.msh", {"contact": "base", "top": "top"})
+    loads = tuple({"name": name, "boundary": "top", "displacement": move}
+                  for name, _, move in TOP_CASES)
+    red, area = reduce_mesh_solid(MeshSolid(read, surfaces, E, NU, np.array([0, 0, 1.0]),
+                                            loads=loads, element=element))
+    scale = np.abs(ref.A).max()
+    for k in ("A", "B", "C"):
+        assert np.abs(getattr(red, k) - getattr(ref, k)).max() < 1e-10 * scale, k
+    assert np.allclose(red.coordinates, ref.coordinates, atol=1e-15)
+    assert np.allclose(red.tangents, ref.tangents) and np.allclose(red.normals, ref.normals)
+    for name in ("normal", "tangential", "tangential2", "gap"):
+        for part in ("p", "q"):
+            assert np.abs(red.loads[name][part] - ref.loads[name][part]).max() \
+                <= 1e-10 * scale, (name, part)
+    assert area.sum() == pytest.approx(LX * LY, rel=1e-12) and np.all(area > 0)
+
+
+@pytest.mark.parametrize("element", ["P1", "P2"])
+def test_traction_forces_are_consistent_resultant_and_moment(element):
+    """Σ f = t · area and Σ x f = t · ∫x dA for a uniform traction t on the top face."""
+    from skfem import Basis, ElementVector
+
+    from slipcycle.fe.contact3d import ELEMENTS_3D, node_dofs_3d
+    from slipcycle.fe.meshfile3d import _traction_forces
+
+    mesh = box()
+    bf = mesh.boundary_facets()
+    top = bf[np.all(np.abs(mesh.p[2, mesh.facets[:, bf]] - H) < 1e-12, axis=0)]
+    basis = Basis(mesh, ElementVector(ELEMENTS_3D[element]()))
+    dofs, xyz = node_dofs_3d(basis)
+    t = np.array([0.3, -1.0, 2.0])
+    f = _traction_forces(basis, dofs, top, t)
+    assert f.sum(axis=0) == pytest.approx(t * LX * LY, rel=1e-12)
+    assert (xyz[0][:, None] * f).sum(axis=0) == pytest.approx(t * LX * LY * LX / 2,
+                                                             rel=1e-12)
+    assert np.abs(f[np.abs(xyz[2] - H) > 1e-12]).max() < 1e-14 * LX * LY
+
+
+def test_the_gap_of_a_tilted_base_is_its_height_above_the_lowest_contact_node(tmp_path):
+    s = 0.01
+    mesh = box(tilt=s)
+    write_msh(tmp_path / "tilt.msh", mesh, {
+        "base": faces_on(mesh, lambda c: np.abs(c[2] - s * c[0]) < 1e-12),
+        "top": faces_on(mesh, lambda c: np.abs(c[2] - H) < 1e-12)})
+    read, surfaces = read_mesh_solid(tmp_path / "tilt.msh", {"contact": "base", "top": "top"})
+    red, _ = reduce_mesh_solid(MeshSolid(read, surfaces, E, NU, np.array([0, 0, 1.0]),
+                                         loads=({"name": "normal", "boundary": "top",
+                                                 "displacement": (0, 0, -1)},),
+                                         element="P1"))
+    g = -np.linalg.solve(red.C, red.loads["gap"]["p"])
+    x, z = red.coordinates[:, 0], red.coordinates[:, 2]
+    assert np.allclose(z, s * x, atol=1e-15)
+    assert np.abs(g - s * x).max() < 1e-9 * s * LX
+
+
+@pytest.mark.parametrize("element", ["P1", "P2"])
+def test_tributary_areas_sum_to_the_contact_area(element):
+    mesh = box(5, 2, 1)
+    bf = mesh.boundary_facets()
+    base = bf[np.all(np.abs(mesh.p[2, mesh.facets[:, bf]]) < 1e-12, axis=0)]
+    a = node_areas(mesh, base, element)
+    assert a.sum() == pytest.approx(LX * LY, rel=1e-12)
+    on = a > 0
+    nv = mesh.p.shape[1]
+    assert np.all(np.abs(mesh.p[2, np.flatnonzero(on[:nv])]) < 1e-12)
+
+
+MODEL = """
+model = "fe"
+[fe]
+geometry = "mesh"
+element = "P1"
+[fe.mesh]
+file = "box.msh"
+contact = "base"
+clamped = []
+E = 210e9
+nu = 0.3
+scale = 1.0
+[[fe.load_case]]
+name = "normal"
+boundary = "top"
+displacement = [0, 0, -1]
+[[fe.load_case]]
+name = "tangential"
+boundary = "top"
+displacement = [1, 0, 0]
+[fe.discrete]
+friction = 0.3
+cycles = 30
+steps_per_cycle = 24
+[fe.discrete.mean]
+normal = 1e-6
+[fe.discrete.amplitude]
+tangential = 6e-7
+"""
+
+
+@pytest.fixture
+def box_model(tmp_path):
+    mesh = box()
+    write_msh(tmp_path / "box.msh", mesh, {
+        "base": faces_on(mesh, lambda c: np.abs(c[2]) < 1e-12),
+        "top": faces_on(mesh, lambda c: np.abs(c[2] - H) < 1e-12),
+        "side": faces_on(mesh, lambda c: np.abs(c[0]) < 1e-12)})
+    (tmp_path / "box.toml").write_text(MODEL)
+    return tmp_path
+
+
+def test_reduce_writes_a_discrete3d_case_that_run_and_the_python_api_solve_alike(
+        run_cli, box_model):
+    import slipcycle
+
+    d = box_model
+    code, out, err = run_cli("reduce", d / "box.toml", "--out", d / "box.npz",
+                             "--case", d / "case.toml")
+    assert code == 0, err
+    text = (d / "case.toml").read_text()
+    assert 'model = "discrete3d"' in text and 'file_case = "gap"' in text
+    code, out, err = run_cli("run", d / "case.toml", "--out", d / "run")
+    assert code == 0, err
+    summary = json.loads((d / "run" / "summary.json").read_text())
+    assert summary["steady_state"] == "cyclic_slip"
+    assert summary["dissipation_per_cycle"] > 0
+    assert abs(summary["energy_balance_error"]) < 1e-6
+    assert sum(summary["dissipation_per_node"]) == pytest.approx(
+        summary["dissipation_per_cycle"], rel=1e-12)
+    res = slipcycle.run(d / "case.toml")
+    assert res.dissipation_per_cycle == summary["dissipation_per_cycle"]
+
+
+@pytest.mark.parametrize("edit, key", [
+    (('contact = "base"', 'contact = "nowhere"'), "fe.mesh.contact"),
+    (('clamped = []', 'clamped = ["side", "base"]'), "fe.mesh.clamped"),
+    (('displacement = [0, 0, -1]', 'displacement = [0, -1]'), "displacement"),
+    (('[fe.mesh]', 'thickness = 0.01\n[fe.mesh]'), "fe.thickness"),
+    (('file = "box.msh"', 'file = "missing.msh"'), "fe.mesh.file"),
+])
+def test_mistakes_in_a_3d_mesh_model_end_in_one_line_naming_the_key(run_cli, box_model,
+                                                                    edit, key):
+    d = box_model
+    (d / "box.toml").write_text(MODEL.replace(*edit))
+    code, out, err = run_cli("reduce", d / "box.toml", "--out", d / "box.npz",
+                             "--case", d / "case.toml")
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and key in lines[0] and "Traceback" not in err
+    assert not (d / "box.npz").exists() and not (d / "case.toml").exists()
+
+
+def test_run_of_a_3d_mesh_model_says_how_to_solve_it(run_cli, box_model):
+    d = box_model
+    code, out, err = run_cli("run", d / "box.toml", "--out", d / "run")
+    assert code == 2 and "slipcycle reduce" in err and "fe.mesh.file" in err
+    assert len(err.strip().splitlines()) == 1 and not (d / "run").exists()
+
+
+def test_a_triangle_that_is_not_a_face_of_the_tetrahedra_is_refused(tmp_path):
+    from slipcycle.io.case import CaseError
+
+    mesh = box()
+    write_msh(tmp_path / "bad.msh", mesh, {"base": np.array([[0, 1, mesh.p.shape[1] - 1]])})
+    with pytest.raises(CaseError, match="not faces of the tetrahedra"):
+        read_mesh_solid(tmp_path / "bad.msh", {"contact": "base"})
+
+
+def test_the_documented_3d_mesh_model_is_the_one_tested_here():
+    import re
+    import tomllib
+    from pathlib import Path
+
+    doc = (Path(__file__).parents[1] / "docs" / "fe.md").read_text()
+    section = doc.split("### Three-dimensional mesh files", 1)[1]
+    block = re.search(r"```toml\n(.*?)```", section, re.S).group(1)
+    shown, tested = tomllib.loads(block), tomllib.loads(MODEL)
+    for k in ("clamped", "scale"):      # defaults, spelled out in the test
+        del tested["fe"]["mesh"][k]
+    assert shown == tested
