@@ -66,6 +66,22 @@ def read_meshio(path: str | Path, key: str):
         raise CaseError(key, f"cannot read mesh file {path}: {exc}") from None
 
 
+def used_cells(m, types: tuple[str, ...], corners: int, what: str, path, key: str
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The corner vertices of the cells of ``types`` in ``m``, numbered among the nodes they
+    use: (cells (k, corners) renumbered, used node numbers of the file, file number →
+    new number or −1). A file without such cells is a :class:`CaseError` naming ``key``."""
+    found = [b.data[:, :corners] for b in m.cells if b.type in types]
+    if not found:
+        raise CaseError(key, f"mesh file {path} holds no {what} "
+                        f"(cell types: {', '.join(b.type for b in m.cells)})")
+    t = np.vstack(found)
+    used = np.unique(t)
+    renumber = np.full(len(m.points), -1)
+    renumber[used] = np.arange(len(used))
+    return renumber[t], used, renumber
+
+
 def is_solid_mesh(m) -> bool:
     """Whether the meshio mesh ``m`` holds tetrahedra (a 3-D body)."""
     return any(b.type in ("tetra", "tetra10") for b in m.cells)
@@ -116,18 +132,11 @@ def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
         line cells, or a line that is not an edge of the triangles.
     """
     m = read_meshio(path, key) if data is None else data
-    tri = [b.data[:, :3] for b in m.cells if b.type in ("triangle", "triangle6")]
-    if not tri:
-        raise CaseError(key, f"mesh file {path} holds no triangles "
-                        f"(cell types: {', '.join(b.type for b in m.cells)})")
-    t = np.vstack(tri)
-    used = np.unique(t)
-    renumber = np.full(len(m.points), -1)
-    renumber[used] = np.arange(len(used))
+    t, used, renumber = used_cells(m, ("triangle", "triangle6"), 3, "triangles", path, key)
     p = np.asarray(m.points, float)[used, :2].T * scale
     if m.points.shape[1] > 2 and np.ptp(m.points[:, 2]) > 1e-12 * max(np.ptp(p), 1.0):
         raise CaseError(key, f"mesh file {path} is not planar (z varies); need a 2-D mesh")
-    mesh = MeshTri(p, renumber[t].T)
+    mesh = MeshTri(p, t.T)
     facet_of = {}
     f = mesh.facets
     for k in range(f.shape[1]):

@@ -31,7 +31,7 @@ from skfem import Basis, ElementVector, FacetBasis, LinearForm, MeshTet, asm
 
 from slipcycle.errors import InputError
 from slipcycle.fe.contact3d import ELEMENTS_3D, Case3D, node_dofs_3d, reduce_contact_3d
-from slipcycle.fe.meshfile import cells_of_tag, known_tags, read_meshio
+from slipcycle.fe.meshfile import cells_of_tag, known_tags, read_meshio, used_cells
 from slipcycle.io.case import CaseError
 from slipcycle.io.matrices import ReducedStiffness
 
@@ -117,22 +117,15 @@ def read_mesh_solid(path: str | Path, tags: dict[str, str], *, key: str = "fe.me
         triangles, or a triangle that is not a face of the tetrahedra.
     """
     m = read_meshio(path, key) if data is None else data
-    tets = [b.data[:, :4] for b in m.cells if b.type in ("tetra", "tetra10")]
-    if not tets:
-        raise CaseError(key, f"mesh file {path} holds no tetrahedra "
-                        f"(cell types: {', '.join(b.type for b in m.cells)})")
-    t = np.vstack(tets)
-    used = np.unique(t)
+    t, used, renumber = used_cells(m, ("tetra", "tetra10"), 4, "tetrahedra", path, key)
     if used.size >= _MAX_NODES:
         raise CaseError(key, f"mesh file {path} has {used.size} nodes; at most "
                              f"{_MAX_NODES - 1}")
-    renumber = np.full(len(m.points), -1)
-    renumber[used] = np.arange(used.size)
     pts = np.asarray(m.points, float)
     if pts.shape[1] != 3:
         raise CaseError(key, f"mesh file {path} has {pts.shape[1]}-D points; need x, y, z")
     p = pts[used].T * scale
-    t = renumber[t].T
+    t = t.T
     e1, e2, e3 = (p[:, t[j]] - p[:, t[0]] for j in (1, 2, 3))
     vol = np.einsum("ij,ij->j", e1, np.cross(e2, e3, axis=0))
     flat = np.abs(vol) <= 1e-12 * np.abs(vol).max()
