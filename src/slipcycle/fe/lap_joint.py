@@ -97,7 +97,7 @@ from slipcycle.fe.geometry import check_number
 from slipcycle.io.matrices import ReducedStiffness
 
 __all__ = ["LapJoint", "LapJointModel", "LapJointMesh", "lap_joint_model", "lap_joint_mesh",
-           "bolt_centres", "EXAMPLE"]
+           "bolt_centres"]
 
 #: elements with positive consistent nodal forces of a pressure, which node-to-node friction
 #: needs (those of quadratic triangles vanish at the vertices): linear tetrahedra and
@@ -283,9 +283,6 @@ class LapJoint:
         return depth * (np.clip(1 - s_upper / d, 0, None) ** 2
                         + np.clip(1 - s_lower / d, 0, None) ** 2)
 
-
-#: the example joint: two 4 mm steel plates, two M8 bolts in a row across, h = 2 mm
-EXAMPLE = LapJoint()
 
 
 def bolt_centres(joint: LapJoint) -> np.ndarray:
