@@ -90,6 +90,39 @@ def test_mesh_file_reduction_equals_the_generated_block(tmp_path, element):
     assert area.sum() == pytest.approx(LX * LY, rel=1e-12) and np.all(area > 0)
 
 
+def test_a_rotated_body_in_millimetres_on_a_flat_normal_to_x_reduces_alike(tmp_path):
+    """The box turned by (x, y, z) → (z, x, y), written in mm (scale 1e-3), on a flat x = 0
+    (normal [1, 0, 0]): the default frames (t1 = y, t2 = z) are the turned t1 = x, t2 = y,
+    the node order is the same, so A, B, C and the load cases must be the same numbers."""
+    mesh = box()
+    base = {"base": faces_on(mesh, lambda c: np.abs(c[2]) < 1e-12),
+            "top": faces_on(mesh, lambda c: np.abs(c[2] - H) < 1e-12)}
+    loads = ({"name": "normal", "boundary": "top", "displacement": (0, 0, -1)},
+             {"name": "shear", "boundary": "top", "displacement": (1, 0, 0)})
+    turned_loads = ({"name": "normal", "boundary": "top", "displacement": (-1, 0, 0)},
+                    {"name": "shear", "boundary": "top", "displacement": (0, 1, 0)})
+    write_msh(tmp_path / "box.msh", mesh, base)
+    write_msh(tmp_path / "turned.msh", MeshTet(1e3 * mesh.p[[2, 0, 1]], mesh.t), base)
+    reds = []
+    for name, normal, specs, scale in (("box", (0, 0, 1.0), loads, 1.0),
+                                       ("turned", (1.0, 0, 0), turned_loads, 1e-3)):
+        read, surfaces = read_mesh_solid(tmp_path / f"{name}.msh",
+                                         {"contact": "base", "top": "top"}, scale=scale)
+        reds.append(reduce_mesh_solid(MeshSolid(read, surfaces, E, NU, np.array(normal),
+                                                loads=specs, element="P1"))[0])
+    ref, red = reds
+    scale = np.abs(ref.A).max()
+    for k in ("A", "B", "C"):
+        assert np.abs(getattr(red, k) - getattr(ref, k)).max() < 1e-9 * scale, k
+    for case in ("normal", "shear", "gap"):
+        for part in ("p", "q"):
+            assert np.abs(red.loads[case][part] - ref.loads[case][part]).max() \
+                <= 1e-9 * scale, (case, part)
+    assert np.allclose(red.tangents[:, 0], [0, 1, 0]) and np.allclose(red.tangents[:, 1],
+                                                                      [0, 0, 1])
+    assert np.allclose(red.coordinates, ref.coordinates[:, [2, 0, 1]], atol=1e-15)
+
+
 @pytest.mark.parametrize("element", ["P1", "P2"])
 def test_traction_forces_are_consistent_resultant_and_moment(element):
     """Σ f = t · area and Σ x f = t · ∫x dA for a uniform traction t on the top face."""
