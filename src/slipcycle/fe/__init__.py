@@ -1,7 +1,8 @@
 """Static reduction of finite-element models to contact nodes (Python API).
 
 2-D plane-strain models (below) and 3-D tetrahedral bodies on a rigid flat
-(:func:`block_on_rigid_3d`, :func:`reduce_on_rigid_flat`, returning a
+(:func:`block_on_rigid_3d`, :func:`reduce_on_rigid_flat`, or a mesh file:
+:func:`read_mesh_solid` and :func:`reduce_mesh_solid`; returning a
 :class:`slipcycle.io.matrices.ReducedStiffness` with two tangential directions per node).
 
 Build a :class:`Problem` with a geometry builder, condense it with :func:`reduce_problem`
@@ -32,6 +33,8 @@ _LAZY = {
     "combined_loads": "loads",
     "coupling_ratio": "checks", "dundurs_beta": "checks",
     "Block3D": "solid3d", "block_on_rigid_3d": "solid3d", "reduce_on_rigid_flat": "solid3d",
+    "MeshSolid": "meshfile3d", "read_mesh_solid": "meshfile3d",
+    "reduce_mesh_solid": "meshfile3d",
 }
 
 __all__ = list(_LAZY)
