@@ -284,3 +284,15 @@ def test_the_documented_3d_mesh_model_is_the_one_tested_here():
     for k in ("clamped", "scale"):      # defaults, spelled out in the test
         del tested["fe"]["mesh"][k]
     assert shown == tested
+
+
+def test_a_contact_surface_too_fine_for_memory_is_refused_before_the_reduction(
+        run_cli, box_model, monkeypatch):
+    """20 contact nodes need 4 · 8 · (3 · 20)² B ≈ 115 kB; a 100 kB budget refuses them."""
+    d = box_model
+    monkeypatch.setenv("SLIPCYCLE_MEMORY_LIMIT", "100kB")
+    code, out, err = run_cli("reduce", d / "box.toml", "--out", d / "box.npz",
+                             "--case", d / "case.toml")
+    assert code == 2 and "fe.mesh.contact" in err and "20 contact nodes" in err
+    assert len(err.strip().splitlines()) == 1
+    assert not (d / "box.npz").exists() and not (d / "case.toml").exists()

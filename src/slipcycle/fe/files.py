@@ -12,7 +12,7 @@ import numpy as np
 
 from slipcycle.condensation import SingularModelError
 from slipcycle.errors import InputError
-from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_solid
+from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_solid, surface_node_count
 from slipcycle.fe.model import (
     build_problem,
     discrete3d_case_text,
@@ -23,6 +23,7 @@ from slipcycle.fe.reduction import reduce_problem
 from slipcycle.io import CaseError, read_case
 from slipcycle.io.matrices import StiffnessError, check_stiffness, read_reduced_stiffness
 from slipcycle.io.results import provenance, write_together
+from slipcycle.io.sizes import check_memory
 
 __all__ = ["import_stiffness", "reduce_model"]
 
@@ -151,6 +152,10 @@ def reduce_model(model: Path, out: Path, case_out: Path | None = None) -> dict:
 def _reduce_solid(case, solid: MeshSolid, discrete: dict | None, out: Path,
                   case_out: Path | None) -> dict:
     """:func:`reduce_model` for a tetrahedral mesh file (a ``discrete3d`` case with --case)."""
+    n = surface_node_count(solid.mesh, solid.surfaces["contact"], solid.element)
+    # the dense reduced K (3N)² and the condensation's copies of it
+    check_memory("fe.mesh.contact", 4 * 8.0 * (3 * n) ** 2, f"{n} contact nodes",
+                 advice="coarsen the mesh on the contact surface")
     try:  # the ReducedStiffness checks K symmetric positive definite on construction
         red, area = reduce_mesh_solid(solid)
     except StiffnessError as exc:

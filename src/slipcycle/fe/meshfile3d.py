@@ -35,7 +35,8 @@ from slipcycle.fe.meshfile import cells_of_tag, known_tags, read_meshio, used_ce
 from slipcycle.io.case import CaseError
 from slipcycle.io.matrices import ReducedStiffness
 
-__all__ = ["MeshSolid", "node_areas", "read_mesh_solid", "reduce_mesh_solid"]
+__all__ = ["MeshSolid", "node_areas", "read_mesh_solid", "reduce_mesh_solid",
+           "surface_node_count"]
 
 #: node numbers must stay below this for the int64 keys of faces (n³ < 2⁶³)
 _MAX_NODES = 2_000_000
@@ -159,6 +160,18 @@ def read_mesh_solid(path: str | Path, tags: dict[str, str], *, key: str = "fe.me
                             f"of tag {theirs!r} are not faces of the tetrahedra")
         surfaces[ours] = np.unique(idx)
     return mesh, surfaces
+
+
+def surface_node_count(mesh: MeshTet, facets: np.ndarray, element: str) -> int:
+    """Number of nodes of ``element`` on the triangles ``facets`` (vertices, and the
+    mid-points of their edges for P2), without building a basis."""
+    f = np.sort(mesh.facets[:, np.asarray(facets)], axis=0).astype(np.int64)
+    count = np.unique(f).size
+    if element == "P2":
+        n = mesh.p.shape[1]
+        count += np.unique(np.concatenate([f[0] * n + f[1], f[1] * n + f[2],
+                                           f[0] * n + f[2]])).size
+    return int(count)
 
 
 def _surface_nodes(basis: Basis, dofs: np.ndarray, facets: np.ndarray) -> np.ndarray:
