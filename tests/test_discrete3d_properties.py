@@ -2,7 +2,7 @@
 loads): the cone, contact complementarity, maximum dissipation, energy balance."""
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from slipcycle.discrete3d.evolution import Evolution3D
@@ -29,8 +29,34 @@ def systems_and_loads(draw):
     return system, load
 
 
+def _small_cone_case():
+    """A case hypothesis found (CI, 2026-11-24): node 2's f p is 2e-4 F, and an extrapolated
+    step leaves −q·Δv 2.1 % below f p |Δv| there (4e-6 F |Δv| absolute)."""
+    A = np.array([
+        [3.76207462, 0.847902434, 0.00329954013, -0.0929979299, -0.776299772, -0.302832298],
+        [0.847902434, 3.03980712, 0.303712897, -0.237101897, -1.07051854, -0.0219328578],
+        [0.00329954013, 0.303712897, 1.70607889, -0.102266134, -0.68540192, 0.256491195],
+        [-0.0929979299, -0.237101897, -0.102266134, 1.71532477, 0.136619039, -0.0388886343],
+        [-0.776299772, -1.07051854, -0.68540192, 0.136619039, 3.1890625, 0.056194139],
+        [-0.302832298, -0.0219328578, 0.256491195, -0.0388886343, 0.056194139, 1.17675767]])
+    C = np.array([[2.77180192, 0.06798725, 0.3477216], [0.06798725, 2.47154053, 0.3143619],
+                  [0.3477216, 0.3143619, 2.83682511]])
+    system = FrictionalSystem3D(A, np.zeros((3, 6)), C,
+                                np.array([0.41738332, 0.41728187, 0.38076244]),
+                                accept_ill_posed=True)
+    load = Load3D.harmonic(
+        np.array([0.46568492, 0.03777966, 0.39422487]),
+        np.array([-0.00132427, 0.36406915, 0.22711742, 0.06469524, -0.09514669, 0.08797011]),
+        np.array([0.52774993, 0.20523249, 0.74125752]),
+        np.array([0.58304585, 0.57070975, 1.36418187, 0.58945567, 0.52327737, 0.5220296]),
+        np.array([2.88459342, 0.55975265, 3.28048445]),
+        np.array([5.52856477, 3.37753239, 4.46346124, 5.68284398, 5.05269232, 4.46403806]))
+    return system, load
+
+
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(systems_and_loads(), st.booleans())
+@example(_small_cone_case(), True)
 def test_cone_contact_and_maximum_dissipation_hold_at_every_step(case, extrapolate):
     """(e) At the end of every committed step: |q_j| ≤ f_j p_j, p ≥ 0, w ≥ 0, p w = 0, a
     separated node carries q = 0, and a slipping node's slip increment is opposite to its
@@ -72,11 +98,15 @@ def test_cone_contact_and_maximum_dissipation_hold_at_every_step(case, extrapola
         # backward-Euler step; extrapolated smooth steps turn it by O(h²) within the step,
         # and a slip that ends within O(h²) of such a step's end leaves q that much inside)
         rtol = 2e-2 if extrapolate else 1e-7
+        # the extrapolated step's error is bounded by the step control in absolute terms
+        # (a force error of order step_tol F), which is more than 2 % of the cone at a
+        # node whose f p is a ten-thousandth of F
+        atol = ftol + (10 * 1e-6 * F if extrapolate else 0.0)
         if extrapolate:
-            assert np.all(np.linalg.norm(q[slip], axis=1) >= (1 - rtol) * fp - ftol)
+            assert np.all(np.linalg.norm(q[slip], axis=1) >= (1 - rtol) * fp - atol)
         else:
             assert np.allclose(np.linalg.norm(q[slip], axis=1), fp, rtol=1e-9, atol=ftol)
-        assert np.all(lhs >= (1 - rtol) * fp * dvn - ftol * dvn)
+        assert np.all(lhs >= (1 - rtol) * fp * dvn - atol * dvn)
         assert np.all(lhs <= (1 + 1e-7) * fp * dvn + ftol * dvn)
     x1 = evo.x
     d_stored = 0.5 * x1 @ system.K @ x1 + vals[-1] @ x1
