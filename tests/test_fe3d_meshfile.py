@@ -10,7 +10,9 @@ Specification:
   the lowest contact node (recovered exactly from the ``gap`` case, p = −C g);
 - the tributary areas of the contact nodes sum to the contact area;
 - ``slipcycle reduce`` writes the reduced model and a discrete3d case that
-  ``slipcycle run`` and ``slipcycle.run`` solve to the same dissipation;
+  ``slipcycle run`` and ``slipcycle.run`` solve to the same dissipation, and
+  ``slipcycle run`` of the model file itself gives the same numbers with the verdict of
+  its (one-mesh) study;
 - every mistake in the model file ends in one line naming the key, exit code 2, and no
   output left behind.
 """
@@ -256,11 +258,27 @@ def test_mistakes_in_a_3d_mesh_model_end_in_one_line_naming_the_key(run_cli, box
     assert not (d / "box.npz").exists() and not (d / "case.toml").exists()
 
 
-def test_run_of_a_3d_mesh_model_says_how_to_solve_it(run_cli, box_model):
+def test_run_of_the_model_file_equals_reduce_then_run_and_warns_of_one_mesh(run_cli,
+                                                                           box_model):
+    """`slipcycle run model.toml` reduces and solves in one go: the same numbers as the
+    discrete3d case `slipcycle reduce --case` writes, with the mesh study's verdict."""
     d = box_model
-    code, out, err = run_cli("run", d / "box.toml", "--out", d / "run")
-    assert code == 2 and "slipcycle reduce" in err and "fe.mesh.file" in err
-    assert len(err.strip().splitlines()) == 1 and not (d / "run").exists()
+    assert run_cli("reduce", d / "box.toml", "--out", d / "box.npz",
+                   "--case", d / "case.toml")[0] == 0
+    assert run_cli("run", d / "case.toml", "--out", d / "two")[0] == 0
+    code, out, err = run_cli("run", d / "box.toml", "--out", d / "one")
+    assert code == 0, err
+    one = json.loads((d / "one" / "summary.json").read_text())
+    two = json.loads((d / "two" / "summary.json").read_text())
+    assert one["model"] == "fe" and one["steady_state_class"] == "cyclic_slip"
+    assert one["dissipation_per_cycle"] == two["dissipation_per_cycle"] > 0
+    assert one["dissipation_per_node"] == two["dissipation_per_node"]
+    assert one["cycles_run"] == two["cycles_run"]
+    assert one["dissipation_mesh_converged"] is None
+    assert "WARNING: mesh convergence of the dissipation not assessed (one mesh; run " \
+           "finer meshes of your own" in one["message"]
+    assert one["node_spacing"] == pytest.approx(np.sqrt(LX * LY / 20), rel=1e-12)
+    assert (d / "one" / "figures" / "mesh_convergence.png").exists()
 
 
 def test_a_triangle_that_is_not_a_face_of_the_tetrahedra_is_refused(tmp_path):

@@ -10,9 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from slipcycle.condensation import SingularModelError
-from slipcycle.errors import InputError
-from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_solid, surface_node_count
+from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_case, surface_node_count
 from slipcycle.fe.model import (
     build_problem,
     discrete3d_case_text,
@@ -156,17 +154,7 @@ def _reduce_solid(case, solid: MeshSolid, discrete: dict | None, out: Path,
     # the dense reduced K (3N)² and the condensation's copies of it
     check_memory("fe.mesh.contact", 4 * 8.0 * (3 * n) ** 2, f"{n} contact nodes",
                  advice="coarsen the mesh on the contact surface")
-    try:  # the ReducedStiffness checks K symmetric positive definite on construction
-        red, area = reduce_mesh_solid(solid)
-    except StiffnessError as exc:
-        raise CaseError("fe", f"reduced stiffness {exc.problem}") from None
-    except InputError as exc:
-        where = {"clamped": "fe.mesh.clamped"}.get(exc.key, "fe.load_case")
-        raise CaseError(where, exc.problem) from None
-    except SingularModelError as exc:
-        raise CaseError("fe.mesh.clamped", f"the body is not held against rigid motion "
-                        f"with its contact nodes held ({exc}); clamp a surface or "
-                        "prescribe the displacement of one") from None
+    red, area = reduce_mesh_case(solid)
     meta = provenance(case.text, case.path)
     data = _stiffness_arrays(red, meta)
     outputs = [(out, lambda tmp: _savez(tmp, data))]

@@ -35,8 +35,8 @@ from slipcycle.fe.meshfile import cells_of_tag, known_tags, read_meshio, used_ce
 from slipcycle.io.case import CaseError
 from slipcycle.io.matrices import ReducedStiffness
 
-__all__ = ["MeshSolid", "node_areas", "read_mesh_solid", "reduce_mesh_solid",
-           "surface_node_count"]
+__all__ = ["MeshSolid", "node_areas", "read_mesh_solid", "reduce_mesh_case",
+           "reduce_mesh_solid", "surface_node_count"]
 
 #: node numbers must stay below this for the int64 keys of faces (n³ < 2⁶³)
 _MAX_NODES = 2_000_000
@@ -297,3 +297,22 @@ def reduce_mesh_solid(solid: MeshSolid, contact: str = "contact"
                             source=source)
     area = node_areas(solid.mesh, solid.surfaces[contact], solid.element)[cnodes]
     return red, area
+
+
+def reduce_mesh_case(solid: MeshSolid) -> tuple[ReducedStiffness, np.ndarray]:
+    """:func:`reduce_mesh_solid` for a model file: every failure a :class:`CaseError`
+    naming the key of the model file (``fe.mesh.clamped``, ``fe.load_case``, ``fe``)."""
+    from slipcycle.condensation import SingularModelError
+    from slipcycle.io.matrices import StiffnessError
+
+    try:  # the ReducedStiffness checks K symmetric positive definite on construction
+        return reduce_mesh_solid(solid)
+    except StiffnessError as exc:
+        raise CaseError("fe", f"reduced stiffness {exc.problem}") from None
+    except InputError as exc:
+        raise CaseError("fe.mesh.clamped" if exc.key == "clamped" else "fe.load_case",
+                        exc.problem) from None
+    except SingularModelError as exc:
+        raise CaseError("fe.mesh.clamped", f"the body is not held against rigid motion "
+                        f"with its contact nodes held ({exc}); clamp a surface or "
+                        "prescribe the displacement of one") from None

@@ -22,7 +22,8 @@ from slipcycle.fe.meshfile3d import MeshSolid
 from slipcycle.fe.reduction import Problem, ReducedModel
 from slipcycle.io.case import Case, CaseError, Section
 
-__all__ = ["GEOMETRIES", "build_problem", "discrete_case_text", "read_discrete_table",
+__all__ = ["GEOMETRIES", "build_problem", "discrete_case_text", "discrete3d_case_text",
+           "discrete3d_load_terms", "read_discrete_table",
            "read_convergence_table", "DEFAULT_REFINEMENTS"]
 
 GEOMETRIES = ("block_on_rigid", "two_blocks", "cylinder_on_block", "mesh")
@@ -273,45 +274,51 @@ def discrete_case_text(table: dict, reduced: ReducedModel, stiffness_file: str,
     return "\n".join(lines) + "\n"
 
 
-def discrete3d_case_text(table: dict, reduced, stiffness_file: str, area=None,
-                         key: str = "fe.discrete") -> str:
-    """A ``discrete3d`` case file (docs/discrete3d.md) of a reduced 3-D model.
-
-    Each basic load case of the stiffness file enters as a ``[[loading.load_case]]`` with
-    ``file_case`` and the time function mean_c + λ amplitude_c cos(θ + phase_c) of
-    ``[fe.discrete]`` (the gap case with mean 1 unless set), the same combination as
-    :func:`discrete_case_text` writes out node by node in 2-D. ``area`` (N,), m², the
-    tributary areas of the nodes, is written when given.
-    """
-    names = list(reduced.loads)
+def discrete3d_load_terms(table: dict, names, key: str = "fe.discrete"
+                          ) -> list[tuple[str, float, float, float]]:
+    """The time functions of the basic load cases ``names`` under ``[fe.discrete]``:
+    (name, mean, amplitude, phase [rad]) of g(θ) = mean + λ amplitude cos(θ + phase) for
+    every case that is not identically zero (the gap case with mean 1 unless set)."""
+    names = list(names)
     for part in ("mean", "amplitude", "phase"):
         for k in table[part]:
             if k not in names:
                 raise CaseError(f"{key}.{part}.{k}", f"unknown load case; the model has "
                                 f"{', '.join(names)}")
+    terms = []
+    for name in names:
+        mean = table["mean"].get(name, 1.0 if name == "gap" else 0.0)
+        amplitude = table["amplitude"].get(name, 0.0)
+        if mean != 0.0 or amplitude != 0.0:
+            terms.append((name, float(mean), float(amplitude),
+                          float(table["phase"].get(name, 0.0))))
+    return terms
+
+
+def discrete3d_case_text(table: dict, reduced, stiffness_file: str, area=None,
+                         key: str = "fe.discrete") -> str:
+    """A ``discrete3d`` case file (docs/discrete3d.md) of a reduced 3-D model.
+
+    Each basic load case of the stiffness file enters as a ``[[loading.load_case]]`` with
+    ``file_case`` and its time function (:func:`discrete3d_load_terms`), the same
+    combination as :func:`discrete_case_text` writes out node by node in 2-D. ``area``
+    (N,), m², the tributary areas of the nodes, is written when given.
+    """
+    terms = discrete3d_load_terms(table, reduced.loads, key)
     lines = [
         "# written by `slipcycle reduce`: discrete 3-D model of the reduced "
         "finite-element model",
         'model = "discrete3d"',
         "[discrete3d]",
         f'stiffness_file = "{stiffness_file}"',
-        f"friction = {table['friction']:.12g}",
+        f"friction = {table['friction']:.17g}",
     ]
     if area is not None:
-        lines.append("area = [" + ", ".join(f"{a:.12g}" for a in area) + "]")
-    lines += [
-        "[loading]",
-        f"lam = {table['lam']:.12g}",
-        "p0 = 0.0",
-    ]
-    for name in names:
-        mean = table["mean"].get(name, 1.0 if name == "gap" else 0.0)
-        amplitude = table["amplitude"].get(name, 0.0)
-        if mean == 0.0 and amplitude == 0.0:
-            continue
-        lines += ["[[loading.load_case]]", f'file_case = "{name}"', f"mean = {mean:.12g}",
-                  f"amplitude = {amplitude:.12g}",
-                  f"phase = {table['phase'].get(name, 0.0):.12g}"]
+        lines.append("area = [" + ", ".join(f"{a:.17g}" for a in area) + "]")
+    lines += ["[loading]", f"lam = {table['lam']:.17g}", "p0 = 0.0"]
+    for name, mean, amplitude, phase in terms:
+        lines += ["[[loading.load_case]]", f'file_case = "{name}"', f"mean = {mean:.17g}",
+                  f"amplitude = {amplitude:.17g}", f"phase = {phase:.17g}"]
     lines += ["[run]", f"cycles = {table['cycles']}",
               f"steps_per_cycle = {table['steps_per_cycle']}"]
     return "\n".join(lines) + "\n"

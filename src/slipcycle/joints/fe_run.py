@@ -38,9 +38,15 @@ from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
 from slipcycle.errors import InputError
+from slipcycle.fe.contact3d import mesh_nodes
 from slipcycle.fe.loads import combined_loads
-from slipcycle.fe.meshfile3d import MeshSolid
-from slipcycle.fe.model import build_problem, read_convergence_table, read_discrete_table
+from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_case, surface_node_count
+from slipcycle.fe.model import (
+    build_problem,
+    discrete3d_load_terms,
+    read_convergence_table,
+    read_discrete_table,
+)
 from slipcycle.fe.reduction import Problem, reduce_problem
 from slipcycle.io import Case, CaseError, RunOutputs
 from slipcycle.io.matrices import StiffnessError, check_stiffness
@@ -162,13 +168,17 @@ def read_fe_case(case: Case) -> FECase:
                                    "reduced model under its [fe.discrete] loads (`slipcycle "
                                    "reduce` writes the reduced model without them)")
     problem = build_problem(case)  # every key of [fe], [fe.discrete], [fe.convergence]
-    if isinstance(problem, MeshSolid):
-        raise CaseError("fe.mesh.file", "a tetrahedral (3-D) mesh is reduced by `slipcycle "
-                        "reduce MODEL --out model.npz --case case.toml`, whose discrete3d "
-                        "case `slipcycle run case.toml` then solves")
     geometry = fe.string("geometry")
     conv = read_convergence_table(fe, geometry)
     table = read_discrete_table(fe)
+    if isinstance(problem, MeshSolid):
+        discrete3d_load_terms(table, [d["name"] for d in problem.loads] + ["gap"])
+        n = surface_node_count(problem.mesh, problem.surfaces["contact"], problem.element)
+        check_memory("fe.mesh.contact", 4 * 8.0 * (3 * n) ** 2 + run_bytes(
+            2 * n, table["steps_per_cycle"], table["cycles"], True),
+            f"{n} contact nodes")
+        return FECase(case, problem, geometry, None, conv["refinements"], conv["rtol"],
+                      table)
     names = [c.name for c in problem.cases]
     for part in ("mean", "amplitude", "phase"):
         for k in table[part]:
@@ -196,9 +206,52 @@ def _spacing(coords: np.ndarray) -> float:
     return float((x[-1] - x[0]) / max(len(x) - 1, 1))
 
 
+def _solve_solid(fc: FECase, solid: MeshSolid, progress) -> tuple[Any, MeshRun]:
+    """Reduce a tetrahedral body from a mesh file and solve it as a 3-D discrete system
+    under the ``[fe.discrete]`` loads: the case ``slipcycle reduce --case`` writes."""
+    from slipcycle.discrete3d.case import discrete3d_case
+    from slipcycle.discrete3d.case import solve_model as solve_model_3d
+    from slipcycle.discrete3d.loads import Load3D
+    from slipcycle.discrete3d.model import FrictionalSystem3D, ModelError3D
+    from slipcycle.loading import HarmonicLoad
+    from slipcycle.loading.nodal import LoadCase
+
+    t0 = time.perf_counter()
+    red, area = reduce_mesh_case(solid)
+    t1 = time.perf_counter()
+    tab, n = fc.discrete, red.n_nodes
+    lam = tab["lam"]
+    cases = tuple(LoadCase(red.loads[name]["p"], red.loads[name]["q"],
+                           HarmonicLoad([mean], [[amplitude]], [[phase]], lam))
+                  for name, mean, amplitude, phase in discrete3d_load_terms(tab, red.loads))
+    zero = HarmonicLoad(np.zeros(n), np.zeros((1, n)), np.zeros((1, n)), lam)
+    zero_q = HarmonicLoad(np.zeros(2 * n), np.zeros((1, 2 * n)), np.zeros((1, 2 * n)), lam)
+    try:
+        system = FrictionalSystem3D(red.A, red.B, red.C, np.full(n, tab["friction"]),
+                                    coordinates=red.coordinates, normals=red.normals,
+                                    tangents=red.tangents, area=area)
+    except ModelError3D as exc:
+        raise CaseError("fe.discrete.friction", str(exc)) from None
+    dc = discrete3d_case(system, Load3D(p=zero, q=zero_q, cases=cases),
+                         {"cycles": tab["cycles"], "steps_per_cycle": tab["steps_per_cycle"]},
+                         fields=())
+    res = solve_model_3d(dc)
+    t2 = time.perf_counter()
+    d = res.dissipation_per_cycle
+    run = MeshRun(elements=None, n_nodes=n, n_dofs=3 * len(mesh_nodes(solid.mesh,
+                                                                      solid.element)),
+                  spacing=float(np.sqrt(np.mean(area))),
+                  dissipation=None if d is None else float(d),
+                  steady_state=res.steady_state_detail, cycles_run=res.cycles_run,
+                  converged=res.converged, reduce_seconds=t1 - t0, solve_seconds=t2 - t1)
+    return res, run
+
+
 def _solve_mesh(fc: FECase, problem: Problem, elements: int | None, progress
                 ) -> tuple[DiscreteResult, MeshRun]:
     """Reduce ``problem`` and solve it under the ``[fe.discrete]`` loads."""
+    if isinstance(problem, MeshSolid):
+        return _solve_solid(fc, problem, progress)
     t0 = time.perf_counter()
     try:
         reduced = reduce_problem(problem)
@@ -260,8 +313,10 @@ def solve_fe(fc: FECase, progress=None) -> FEResult:
 def _study(fc: FECase, runs: tuple[MeshRun, ...]) -> tuple[MeshConvergence | None, str]:
     """The mesh convergence of the dissipation and the sentence that reports it."""
     if len(runs) < 2:
-        return None, ("mesh convergence of the dissipation not assessed (one mesh; set "
-                      "[fe.convergence] refinements = [1, 2, 4] to assess it)")
+        how = ("run finer meshes of your own as separate cases to assess it"
+               if fc.elements is None else
+               "set [fe.convergence] refinements = [1, 2, 4] to assess it")
+        return None, f"mesh convergence of the dissipation not assessed (one mesh; {how})"
     values = [r.dissipation for r in runs]
     if any(v is None for v in values):
         return None, ("mesh convergence of the dissipation not assessed: no steady cycle "
@@ -322,8 +377,10 @@ class FEResult(RunResult):
 
     @property
     def flags(self) -> dict[str, tuple[str, ...]]:
-        """Every word of the categorical summary entries (those of the discrete model)."""
-        return dict(SUMMARY_FLAGS)
+        """Every word of the categorical summary entries (those of the discrete model
+        that solved the finest mesh)."""
+        return dict(self.finest.flags) if not isinstance(self.finest, DiscreteResult) \
+            else dict(SUMMARY_FLAGS)
 
     def summary(self) -> dict:
         """The finest mesh's discrete summary, with the mesh study and ``units``.
