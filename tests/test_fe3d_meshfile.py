@@ -314,3 +314,31 @@ def test_a_contact_surface_too_fine_for_memory_is_refused_before_the_reduction(
     assert code == 2 and "fe.mesh.contact" in err and "20 contact nodes" in err
     assert len(err.strip().splitlines()) == 1
     assert not (d / "box.npz").exists() and not (d / "case.toml").exists()
+
+
+def test_shakedown_of_a_3d_mesh_model_dissipates_nothing(run_cli, box_model):
+    """f = 0.6: every node sticks in the steady cycle; the FE result reports D = 0 (as on
+    2-D meshes), not the solver's round-off."""
+    d = box_model
+    (d / "box.toml").write_text(MODEL.replace("friction = 0.3", "friction = 0.6"))
+    code, out, err = run_cli("run", d / "box.toml", "--out", d / "run")
+    assert code == 0, err
+    s = json.loads((d / "run" / "summary.json").read_text())
+    assert s["steady_state_class"] == "shakedown"
+    assert s["dissipation_per_cycle"] == 0.0 and s["dissipation_mesh_values"] == [0.0]
+
+
+def test_a_sweep_of_a_3d_mesh_model_stores_what_run_gives(run_cli, box_model):
+    import xarray as xr
+
+    d = box_model
+    code, out, err = run_cli("sweep", d / "box.toml", "--set", "fe.discrete.friction=0.25,0.3",
+                             "--out", d / "sweep", "--workers", "1", "--no-progress")
+    assert code == 0, err
+    with xr.open_dataset(d / "sweep" / "result.nc") as ds:
+        stored = ds["dissipation_per_cycle"].values.tolist()
+    for f, value in zip((0.25, 0.3), stored, strict=True):
+        (d / f"f{f}.toml").write_text(MODEL.replace("friction = 0.3", f"friction = {f}"))
+        assert run_cli("run", d / f"f{f}.toml", "--out", d / f"run{f}")[0] == 0
+        s = json.loads((d / f"run{f}" / "summary.json").read_text())
+        assert value == s["dissipation_per_cycle"] > 0
