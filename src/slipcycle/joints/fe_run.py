@@ -8,7 +8,11 @@ load cases (:func:`slipcycle.fe.loads.combined_loads`) and solved to its steady 
 the discrete solver (:func:`slipcycle.discrete.case.solve_model`). The dissipation per
 cycle of the meshes gives the observed order and the Richardson extrapolation
 (:func:`slipcycle.joints.convergence.mesh_convergence`); the result is that of the finest
-mesh, with the mesh study beside it (:class:`FEResult`).
+mesh, with the mesh study beside it (:class:`FEResult`). A mesh file of tetrahedra
+(:mod:`slipcycle.fe.meshfile3d`) is one mesh, reduced and solved by the 3-D discrete model
+(:func:`slipcycle.discrete3d.case.solve_model`) under the same time functions as the
+``discrete3d`` case ``slipcycle reduce --case`` writes
+(:func:`slipcycle.fe.model.discrete3d_load_terms`).
 
 Whether the dissipation converges depends on the contact: an incomplete contact (a
 cylinder on a block) has bounded tractions and a slip zone of fixed width, resolved by
