@@ -23,6 +23,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 meshio = pytest.importorskip("meshio")
 
@@ -342,3 +344,29 @@ def test_a_sweep_of_a_3d_mesh_model_stores_what_run_gives(run_cli, box_model):
         assert run_cli("run", d / f"f{f}.toml", "--out", d / f"run{f}")[0] == 0
         s = json.loads((d / f"run{f}" / "summary.json").read_text())
         assert value == s["dissipation_per_cycle"] > 0
+
+
+@settings(max_examples=25, deadline=None)
+@given(nx=st.integers(1, 5), ny=st.integers(1, 4), tilt=st.floats(0.0, 0.2),
+       scale=st.sampled_from([1.0, 1e-3]))
+def test_gap_and_areas_of_any_tilted_box_in_any_unit(tmp_path_factory, nx, ny, tilt, scale):
+    """Whatever the mesh, the base's tilt and the file's unit: the gap case holds the
+    height of each contact node above the lowest along the flat's normal, and the
+    tributary areas sum to the base's area (√(1 + tilt²) L_x L_y)."""
+    tmp = tmp_path_factory.mktemp("box")
+    mesh = box(nx, ny, 1, tilt=tilt)
+    write_msh(tmp / "b.msh", MeshTet(mesh.p / scale, mesh.t), {
+        "base": faces_on(mesh, lambda c: np.abs(c[2] - tilt * c[0]) < 1e-12),
+        "top": faces_on(mesh, lambda c: np.abs(c[2] - H) < 1e-12)})
+    read, surfaces = read_mesh_solid(tmp / "b.msh", {"contact": "base", "top": "top"},
+                                     scale=scale)
+    red, area = reduce_mesh_solid(MeshSolid(read, surfaces, E, NU, np.array([0, 0, 1.0]),
+                                            loads=({"name": "normal", "boundary": "top",
+                                                    "displacement": (0, 0, -1)},),
+                                            element="P1"))
+    g = -np.linalg.solve(red.C, red.loads["gap"]["p"])
+    x, z = red.coordinates[:, 0], red.coordinates[:, 2]
+    assert np.abs(z - tilt * x).max() < 1e-12 * LX
+    assert np.abs(g - tilt * x).max() <= 1e-9 * max(tilt, 1e-3) * LX
+    assert area.sum() == pytest.approx(np.sqrt(1 + tilt**2) * LX * LY, rel=1e-12)
+    assert red.n_nodes == (nx + 1) * (ny + 1)
