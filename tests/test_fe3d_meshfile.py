@@ -23,7 +23,7 @@ import json
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 meshio = pytest.importorskip("meshio")
@@ -146,23 +146,6 @@ def test_traction_forces_are_consistent_resultant_and_moment(element):
     assert (xyz[0][:, None] * f).sum(axis=0) == pytest.approx(t * LX * LY * LX / 2,
                                                              rel=1e-12)
     assert np.abs(f[np.abs(xyz[2] - H) > 1e-12]).max() < 1e-14 * LX * LY
-
-
-def test_the_gap_of_a_tilted_base_is_its_height_above_the_lowest_contact_node(tmp_path):
-    s = 0.01
-    mesh = box(tilt=s)
-    write_msh(tmp_path / "tilt.msh", mesh, {
-        "base": faces_on(mesh, lambda c: np.abs(c[2] - s * c[0]) < 1e-12),
-        "top": faces_on(mesh, lambda c: np.abs(c[2] - H) < 1e-12)})
-    read, surfaces = read_mesh_solid(tmp_path / "tilt.msh", {"contact": "base", "top": "top"})
-    red, _ = reduce_mesh_solid(MeshSolid(read, surfaces, E, NU, np.array([0, 0, 1.0]),
-                                         loads=({"name": "normal", "boundary": "top",
-                                                 "displacement": (0, 0, -1)},),
-                                         element="P1"))
-    g = -np.linalg.solve(red.C, red.loads["gap"]["p"])
-    x, z = red.coordinates[:, 0], red.coordinates[:, 2]
-    assert np.allclose(z, s * x, atol=1e-15)
-    assert np.abs(g - s * x).max() < 1e-9 * s * LX
 
 
 @pytest.mark.parametrize("element", ["P1", "P2"])
@@ -349,6 +332,7 @@ def test_a_sweep_of_a_3d_mesh_model_stores_what_run_gives(run_cli, box_model):
 @settings(max_examples=25, deadline=None)
 @given(nx=st.integers(1, 5), ny=st.integers(1, 4), tilt=st.floats(0.0, 0.2),
        scale=st.sampled_from([1.0, 1e-3]))
+@example(nx=4, ny=3, tilt=0.01, scale=1.0)
 def test_gap_and_areas_of_any_tilted_box_in_any_unit(tmp_path_factory, nx, ny, tilt, scale):
     """Whatever the mesh, the base's tilt and the file's unit: the gap case holds the
     height of each contact node above the lowest along the flat's normal, and the
