@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+import pytest
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from slipcycle.discrete import DiscreteLoad, FrictionalSystem, critical_friction, simulate
 from slipcycle.discrete.evolution import Evolution
+from slipcycle.discrete.rate import RateProblemError
 from slipcycle.loading import TabulatedLoad
 
 SETTINGS = settings(max_examples=25, deadline=None,
@@ -80,9 +82,18 @@ def test_dissipation_nonnegative_and_energy_balance(seed, n, coupled):
 
 @SETTINGS
 @given(seed=st.integers(0, 10_000), n=st.integers(1, 3), refine=st.integers(2, 9))
+@example(seed=1019, n=3, refine=2)
 def test_refining_samples_of_a_piecewise_linear_path_changes_nothing(seed, n, refine):
     system, load = build(seed, n, tabulated=True)
-    coarse = simulate(system, load, cycles=3, steps_per_cycle=1, min_cycles=3)
+    try:
+        coarse = simulate(system, load, cycles=3, steps_per_cycle=1, min_cycles=3)
+    except RateProblemError:
+        # f is below the all-contact f_crit only: with nodes separated the rate problem
+        # can have no solution (seed 1019: a 4×4 LCP matrix with a principal minor of
+        # −0.23 and no complementary solution); the refined path reaches the same state
+        with pytest.raises(RateProblemError):
+            simulate(system, load, cycles=3, steps_per_cycle=refine * 3, min_cycles=3)
+        return
     fine = simulate(system, load, cycles=3, steps_per_cycle=refine * 3, min_cycles=3)
     idx = np.searchsorted(fine.theta, coarse.theta)
     assert np.allclose(fine.theta[idx], coarse.theta)
