@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_case, surface_node_count
+from slipcycle.fe.meshfile3d import MeshSolid, check_reduction_memory, reduce_mesh_case
 from slipcycle.fe.model import (
     build_problem,
     discrete3d_case_text,
@@ -21,7 +21,6 @@ from slipcycle.fe.reduction import reduce_problem
 from slipcycle.io import CaseError, read_case
 from slipcycle.io.matrices import StiffnessError, check_stiffness, read_reduced_stiffness
 from slipcycle.io.results import provenance, write_together
-from slipcycle.io.sizes import check_memory
 
 __all__ = ["import_stiffness", "reduce_model"]
 
@@ -150,10 +149,7 @@ def reduce_model(model: Path, out: Path, case_out: Path | None = None) -> dict:
 def _reduce_solid(case, solid: MeshSolid, discrete: dict | None, out: Path,
                   case_out: Path | None) -> dict:
     """:func:`reduce_model` for a tetrahedral mesh file (a ``discrete3d`` case with --case)."""
-    n = surface_node_count(solid.mesh, solid.surfaces["contact"], solid.element)
-    # the dense reduced K (3N)² and the condensation's copies of it
-    check_memory("fe.mesh.contact", 4 * 8.0 * (3 * n) ** 2, f"{n} contact nodes",
-                 advice="coarsen the mesh on the contact surface")
+    check_reduction_memory(solid)
     red, area = reduce_mesh_case(solid)
     meta = provenance(case.text, case.path)
     data = _stiffness_arrays(red, meta)
@@ -163,8 +159,6 @@ def _reduce_solid(case, solid: MeshSolid, discrete: dict | None, out: Path,
         text = discrete3d_case_text(discrete, red, rel, area)
         outputs.append((case_out, lambda tmp: tmp.write_text(text, encoding="utf-8")))
     write_together(outputs)
-    n_dofs = 3 * (solid.mesh.p.shape[1] + (solid.mesh.edges.shape[1]
-                                           if solid.element == "P2" else 0))
-    return {"geometry": "mesh", "n_dofs": n_dofs, "n_contact_nodes": red.n_nodes,
+    return {"geometry": "mesh", "n_dofs": solid.n_dofs, "n_contact_nodes": red.n_nodes,
             "element": solid.element, "load_cases": list(red.loads),
             "coupling_B_over_A": float(np.linalg.norm(red.B) / np.linalg.norm(red.A))}

@@ -35,8 +35,8 @@ from slipcycle.fe.meshfile import cells_of_tag, known_tags, read_meshio, used_ce
 from slipcycle.io.case import CaseError
 from slipcycle.io.matrices import ReducedStiffness
 
-__all__ = ["MeshSolid", "node_areas", "read_mesh_solid", "reduce_mesh_case",
-           "reduce_mesh_solid", "surface_node_count"]
+__all__ = ["MeshSolid", "check_reduction_memory", "node_areas", "read_mesh_solid",
+           "reduce_mesh_case", "reduce_mesh_solid", "surface_node_count"]
 
 #: node numbers must stay below this for the int64 keys of faces (n³ < 2⁶³)
 _MAX_NODES = 2_000_000
@@ -79,6 +79,13 @@ class MeshSolid:
     element: str = "P2"
     formulation: str = "auto"
     info: dict = field(default_factory=dict)
+
+    @property
+    def n_dofs(self) -> int:
+        """Degrees of freedom of the body: 3 per vertex, and per edge mid-point for P2."""
+        nodes = self.mesh.p.shape[1] + (self.mesh.edges.shape[1] if self.element == "P2"
+                                        else 0)
+        return 3 * nodes
 
 
 def _face_keys(tri: np.ndarray, n: int) -> np.ndarray:
@@ -164,14 +171,20 @@ def read_mesh_solid(path: str | Path, tags: dict[str, str], *, key: str = "fe.me
 
 def surface_node_count(mesh: MeshTet, facets: np.ndarray, element: str) -> int:
     """Number of nodes of ``element`` on the triangles ``facets`` (vertices, and the
-    mid-points of their edges for P2), without building a basis."""
-    f = np.sort(mesh.facets[:, np.asarray(facets)], axis=0).astype(np.int64)
-    count = np.unique(f).size
-    if element == "P2":
-        n = mesh.p.shape[1]
-        count += np.unique(np.concatenate([f[0] * n + f[1], f[1] * n + f[2],
-                                           f[0] * n + f[2]])).size
-    return int(count)
+    mid-points of their edges for P2): those with a tributary area (:func:`node_areas`)."""
+    return int(np.count_nonzero(node_areas(mesh, facets, element)))
+
+
+def check_reduction_memory(solid: MeshSolid, extra: float = 0.0,
+                           contact: str = "contact") -> None:
+    """Refuse (:class:`CaseError` naming ``fe.mesh.contact``) a contact surface whose dense
+    reduced stiffness (3N)², with the condensation's copies of it, and ``extra`` bytes
+    (what solves it) exceed the memory budget (:func:`slipcycle.io.sizes.check_memory`)."""
+    from slipcycle.io.sizes import check_memory
+
+    n = surface_node_count(solid.mesh, solid.surfaces[contact], solid.element)
+    check_memory("fe.mesh.contact", 4 * 8.0 * (3 * n) ** 2 + extra, f"{n} contact nodes",
+                 advice="coarsen the mesh on the contact surface")
 
 
 def _surface_nodes(basis: Basis, dofs: np.ndarray, facets: np.ndarray) -> np.ndarray:

@@ -32,7 +32,6 @@ from typing import Any, ClassVar
 import numpy as np
 
 from slipcycle.discrete.case import (
-    SUMMARY_FLAGS,
     SUMMARY_UNITS,
     DiscreteResult,
     discrete_case,
@@ -42,9 +41,13 @@ from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
 from slipcycle.errors import InputError
-from slipcycle.fe.contact3d import mesh_nodes
 from slipcycle.fe.loads import combined_loads
-from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_case, surface_node_count
+from slipcycle.fe.meshfile3d import (
+    MeshSolid,
+    check_reduction_memory,
+    reduce_mesh_case,
+    surface_node_count,
+)
 from slipcycle.fe.model import (
     build_problem,
     discrete3d_load_terms,
@@ -178,9 +181,8 @@ def read_fe_case(case: Case) -> FECase:
     if isinstance(problem, MeshSolid):
         discrete3d_load_terms(table, [d["name"] for d in problem.loads] + ["gap"])
         n = surface_node_count(problem.mesh, problem.surfaces["contact"], problem.element)
-        check_memory("fe.mesh.contact", 4 * 8.0 * (3 * n) ** 2 + run_bytes(
-            2 * n, table["steps_per_cycle"], table["cycles"], True),
-            f"{n} contact nodes")
+        check_reduction_memory(problem, run_bytes(2 * n, table["steps_per_cycle"],
+                                                  table["cycles"], True))
         return FECase(case, problem, geometry, None, conv["refinements"], conv["rtol"],
                       table)
     names = [c.name for c in problem.cases]
@@ -244,8 +246,7 @@ def _solve_solid(fc: FECase, solid: MeshSolid, progress) -> tuple[Any, MeshRun]:
     d = res.dissipation_per_cycle
     if res.steady_state_detail == "shakedown":
         d = 0.0            # as for 2-D meshes: nothing slips, the solver's D is round-off
-    run = MeshRun(elements=None, n_nodes=n, n_dofs=3 * len(mesh_nodes(solid.mesh,
-                                                                      solid.element)),
+    run = MeshRun(elements=None, n_nodes=n, n_dofs=solid.n_dofs,
                   spacing=float(np.sqrt(np.mean(area))),
                   dissipation=None if d is None else float(d),
                   steady_state=res.steady_state_detail, cycles_run=res.cycles_run,
@@ -385,8 +386,7 @@ class FEResult(RunResult):
     def flags(self) -> dict[str, tuple[str, ...]]:
         """Every word of the categorical summary entries (those of the discrete model
         that solved the finest mesh)."""
-        return dict(self.finest.flags) if not isinstance(self.finest, DiscreteResult) \
-            else dict(SUMMARY_FLAGS)
+        return dict(self.finest.flags)
 
     def summary(self) -> dict:
         """The finest mesh's discrete summary, with the mesh study and ``units``.
