@@ -207,6 +207,13 @@ def test_demo_outputs_follow_the_same_standards(tmp_path, run_cli):
     for d in dirs:
         _check_netcdf(d / "result.nc")
         _check_summary(d / "summary.json", "demo")
+    # a run's warning reaches the report beside its numbers (the lap joint: one mesh)
+    report = (tmp_path / "demo" / "report.md").read_text()
+    for d in dirs:
+        message = str(json.loads((d / "summary.json").read_text()).get("message", ""))
+        if "WARNING: " in message:
+            assert f"**WARNING: {message.partition('WARNING: ')[2]}**" in report, d.name
+    assert "**WARNING: dissipation not checked for mesh convergence" in report
 
 
 # -- case files -------------------------------------------------------------------------

@@ -106,6 +106,11 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None, 
                   case.text.strip(), "```", "", "| quantity | value | unit |", "|---|---|---|"]
         lines += [f"| `{k}` | {json.dumps(s[k])} | {units.get(k, '')} |" for k in keys]
         lines.append("")
+        # a warning of the run (e.g. a dissipation not checked for mesh convergence) is
+        # part of its answer: the report shows it beside the numbers
+        warning = str(s.get("message", "")).partition("WARNING: ")[2]
+        if warning:
+            lines += [f"**WARNING: {warning}**", ""]
         for fig in sorted((out / name / "figures").glob("*.png")):
             lines.append(f"![{fig.stem}]({name}/figures/{fig.name})")
         lines.append("")
