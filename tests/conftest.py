@@ -136,6 +136,24 @@ def slid_block(elements: int):
     return system, load, protocol
 
 
+def assert_reproduced_by_one_more_cycle(run, system, load, steps: int, state_tol: float):
+    """One more exact cycle from a run's final state reproduces that state (to
+    ``state_tol`` of its scale) and its dissipation per node (to 1e-6 of D): a periodic
+    state, not a stop on the way."""
+    import numpy as np
+
+    from slipcycle.discrete.evolution import Evolution
+
+    x0 = run.cycle_start_states[-1]
+    theta, vals = load.cycle_samples(steps)
+    evo = Evolution(system, x0, vals[0], run.force_scale)
+    totals = evo.follow(theta, vals)
+    scale = max(run.disp_scale, float(np.abs(x0).max()))
+    assert np.abs(evo.x - x0).max() <= state_tol * scale
+    np.testing.assert_allclose(totals.dissipation, run.dissipation_per_node, rtol=0,
+                               atol=1e-6 * run.dissipation_per_cycle)
+
+
 def assert_same_steady_state(fast, plain, rel: float = 1e-6):
     """The accelerated run ends where plain cycling does: the same class and permanently
     stuck nodes, and D and D per node within ``rel`` of max(|D|, force × displacement

@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import assert_same_steady_state, slid_block
+from conftest import assert_reproduced_by_one_more_cycle, assert_same_steady_state, slid_block
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from slipcycle.discrete import DiscreteLoad, FrictionalSystem, simulate
-from slipcycle.discrete.evolution import Evolution
 
 #: dissipation per cycle [J] of plain cycling of the slid 101-node block to 1e-13
 #: (accelerate=False, 50 samples per cycle; measured once)
@@ -43,14 +42,7 @@ def test_fe_block_101_step_reaches_the_dissipation_of_tightly_converged_plain_cy
     assert fast.slipping_nodes == fast.separating_nodes == list(range(95, 101))
     assert fast.permanently_stuck_nodes == list(range(95))
     # one more exact cycle from the final state reproduces it and its D per node
-    x0 = fast.cycle_start_states[-1]
-    theta, vals = load.cycle_samples(50)
-    evo = Evolution(system, x0, vals[0], fast.force_scale)
-    totals = evo.follow(theta, vals)
-    scale = max(fast.disp_scale, float(np.abs(x0).max()))
-    assert np.abs(evo.x - x0).max() <= 1e-9 * scale
-    np.testing.assert_allclose(totals.dissipation, fast.dissipation_per_node, rtol=0,
-                               atol=1e-6 * fast.dissipation_per_cycle)
+    assert_reproduced_by_one_more_cycle(fast, system, load, 50, 1e-9)
 
 
 def _fe_like_case(seed: int, n: int):

@@ -224,7 +224,7 @@ class Evolution:
         #: adds the last interval; :func:`~slipcycle.discrete.periodic.piece_constraints`)
         self.margin_log: list | None = None
         #: with ``jacobian_log``: every node's maximal intervals of one mode that begin or
-        #: end at an event, as (node, first event, start θ, last event, end θ) with event
+        #: end at an event, as (node, first event, start θ, last event, end θ, mode) with event
         #: indices into ``jacobian_log`` (−1: a load sample or the end of the path, which
         #: do not move) — a perturbed start moves the events, and an interval whose length
         #: would go negative means that the sequence of modes changes
@@ -311,7 +311,8 @@ class Evolution:
         """End the current mode interval of ``nodes`` at ``theta`` (by ``event``, or −1)."""
         s_ev, s_th = self._episode_event, self._episode_theta
         for j in nodes[(s_ev[nodes] >= 0) | (event >= 0)]:
-            self.episode_log.append((int(j), int(s_ev[j]), float(s_th[j]), event, theta))
+            self.episode_log.append((int(j), int(s_ev[j]), float(s_th[j]), event, theta,
+                                     int(self.modes[j])))
         s_ev[nodes] = event
         s_th[nodes] = theta
 

@@ -56,6 +56,7 @@ SEGMENT_TOL = 1e-12
 ROUND_OFF = 10.0
 
 __all__ = ["CycleJacobian", "cycle_jacobian", "PieceConstraints", "piece_constraints",
+           "slow_mode_sum",
            "ModeIntervals", "PieceRun", "follow_piece"]
 
 
@@ -149,6 +150,73 @@ def cycle_jacobian(log: list, K: np.ndarray, friction: np.ndarray,
         hit = (pos < m) & (S[np.minimum(pos, m - 1)] == n + nodes[gap])
         A[gap[hit], pos[hit]] = 1.0
     return CycleJacobian(S, np.ascontiguousarray(U), np.ascontiguousarray(A), **timing)
+
+
+def slow_mode_sum(jac: CycleJacobian, r: np.ndarray, krylov: int = 40,
+                  rates: tuple[float, float] = (0.0, 0.995)) -> np.ndarray:
+    """The slowly decaying part of the increments plain cycling still has to make.
+
+    On the piece, plain cycling from x goes on by d_∞ − r = M r + M² r + … beyond the
+    cycle just run (r its increment). Where pieces change every cycle the series cannot
+    be followed (:func:`follow_piece`), but the state creeps along the few eigenvectors
+    of M whose eigenvalues are close to 1. Their part of the series is summed in closed
+    form, Σ_{k≥1} λᵏ z = λ/(1 − λ) z, the rest is left to the next cycles: the recursive
+    projection method of Shroff & Keller (1993, *SIAM J. Numer. Anal.* 30, 1099–1120),
+    with the slow subspace taken from the Ritz pairs of M on the Krylov space of r
+    (Arnoldi, ``krylov`` products by M, O(E m) each; Saad, *Numerical Methods for Large
+    Eigenvalue Problems*, 2nd ed., §6.2). The series lies in that Krylov space, so no
+    direction is moved that plain cycling would not move. Eigenvalues at or above
+    ``rates[1]`` are left alone: λ = 1 is the memory of the nodes (a set of periodic
+    states, Barber 2012 §3), and a piece's eigenvalue next to 1 need not be the map's.
+
+    Parameters
+    ----------
+    jac : CycleJacobian
+    r : (m,) array
+        Increment of the recorded cycle on S [m].
+    krylov : int
+        Dimension of the Krylov space.
+    rates : (float, float)
+        The moduli of the eigenvalues summed: from ``rates[0]`` (faster modes are damped
+        by the next cycles anyway) to below ``rates[1]``.
+
+    Returns
+    -------
+    (m,) array
+        The increment on S to add to the state after the recorded cycle [m]; zero where no
+        eigenvalue qualifies.
+    """
+    m = r.size
+    beta = float(np.linalg.norm(r))
+    k = min(krylov, m)
+    if beta == 0.0 or k == 0:
+        return np.zeros(m)
+    V = np.zeros((m, k + 1))
+    H = np.zeros((k + 1, k))
+    V[:, 0] = r / beta
+    for j in range(k):
+        w = _apply_map(jac.U, jac.A, V[:, j].copy())
+        for _ in range(2):                      # Gram–Schmidt twice (Giraud et al. 2005)
+            h = V[:, :j + 1].T @ w
+            H[:j + 1, j] += h
+            w -= V[:, :j + 1] @ h
+        H[j + 1, j] = np.linalg.norm(w)
+        if H[j + 1, j] <= 1e-12 * beta:         # the Krylov space is invariant
+            k = j + 1
+            break
+        V[:, j + 1] = w / H[j + 1, j]
+    lam, W = np.linalg.eig(H[:k, :k])
+    take = (np.abs(lam) >= rates[0]) & (np.abs(lam) < rates[1])
+    if not take.any():
+        return np.zeros(m)
+    e1 = np.zeros(k, complex)
+    e1[0] = beta
+    try:
+        c = np.linalg.solve(W, e1)              # r in the Ritz basis
+    except np.linalg.LinAlgError:
+        return np.zeros(m)
+    extra = V[:, :k] @ (W[:, take] @ (lam[take] / (1 - lam[take]) * c[take]))
+    return extra.real
 
 
 @dataclass(frozen=True)
@@ -356,13 +424,15 @@ class ModeIntervals:
     end: np.ndarray
     length: np.ndarray
     tol: np.ndarray
+    #: (k,) int array: the node's mode on each interval (``slipcycle.discrete.model``)
+    mode: np.ndarray = None
 
     @classmethod
     def from_log(cls, episode_log: list, tol: float) -> ModeIntervals:
         """From ``Evolution.episode_log``, with the round-off allowance ``tol`` [rad]."""
-        ep = np.array(episode_log, float).reshape(-1, 5)
+        ep = np.array(episode_log, float).reshape(-1, 6)
         return cls(ep[:, 1].astype(int), ep[:, 3].astype(int), ep[:, 4] - ep[:, 2],
-                   np.full(ep.shape[0], tol))
+                   np.full(ep.shape[0], tol), ep[:, 5].astype(int))
 
     def hold(self, shift: np.ndarray) -> bool:
         """Whether every interval keeps a non-negative length when the events move by

@@ -31,14 +31,17 @@ import numpy as np
 from slipcycle.discrete.evolution import Evolution
 from slipcycle.discrete.lcp import lemke
 from slipcycle.discrete.loads import DiscreteLoad
-from slipcycle.discrete.model import FrictionalSystem
+from slipcycle.discrete.model import SEPARATED, SLIP_NEG, SLIP_POS, FrictionalSystem
 from slipcycle.discrete.periodic import (
     ROUND_OFF,
+    SEGMENT_TOL,
     ModeIntervals,
     PieceConstraints,
+    _apply_map_coefficients,
     cycle_jacobian,
     follow_piece,
     piece_constraints,
+    slow_mode_sum,
 )
 from slipcycle.errors import InadmissibleInitialState
 from slipcycle.loading.nodal import force_scale
@@ -79,6 +82,25 @@ MAX_FOLLOW = 1000
 #: what :func:`_periodic_target` answers when a step looks possible on the events and
 #: mode intervals of a cycle recorded without its inequalities
 RECORD = "record the inequalities"
+
+#: slow-mode steps (:func:`_slow_mode_target`) refused by their checking cycle before a run
+#: stops trying them
+MAX_SLOW_REJECTIONS = 10
+
+#: a slow-mode step is refused when the cycle from it has a residual this many times that
+#: of the cycle before it (the step wakes faster modes that the next cycles damp, so some
+#: growth of the residual is not a failure; a step off its piece is one)
+SLOW_GROWTH = 10.0
+
+#: fewest ratio |Φ(x_k) − x_k| / |x_k − x_{k−1}| of a creep worth a slow-mode step
+SLOW_CREEP = 0.5
+
+#: consecutive cycles in which the follower found no step before a slow-mode step is tried
+#: (the follower keeps plain cycling's memory exactly and skips more at once where it can)
+SLOW_AFTER = 3
+
+#: what a slow-mode step's checking cycle is compared with (``predicted`` of a step)
+SLOW = "slow"
 
 #: a steady state reached with steps is polished by one more step down to this fraction
 #: of the steady-state tolerance
@@ -157,14 +179,102 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
         predicted[jac.S] += run.after
         return target, predicted
     target[jac.S] += run.after
+    return (target, None) if _admissible(evo, system, target, r_w0) else None
+
+
+def _admissible(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
+                r_w0: np.ndarray) -> bool:
+    """Whether the state x (2N,) satisfies the friction and contact inequalities at θ = 0
+    (load r_w0), within ten times the solver's thresholds."""
     n = system.n_nodes
-    r = r_w0 + system.K @ target
-    q, p, w = r[:n], r[n:], target[n:]
+    r = r_w0 + system.K @ x
+    q, p, w = r[:n], r[n:], x[n:]
     ftol, dtol = 10 * evo.force_tol, 10 * evo.solver.disp_tol
     open_ = w > evo.solver.disp_tol
     bad = np.where(open_, (np.abs(q) > ftol) | (np.abs(p) > ftol),
                    (np.abs(q) > system.friction * p + ftol) | (p < -ftol)) | (w < -dtol)
-    return None if bad.any() else (target, None)
+    return not bad.any()
+
+
+def _slow_mode_target(evo: Evolution, system: FrictionalSystem, x_next: np.ndarray,
+                      increment: np.ndarray, r_w0: np.ndarray, drift_tol: float):
+    """Where plain cycling creeps to along the slow eigenvectors of the cycle's Jacobian
+    (:func:`~slipcycle.discrete.periodic.slow_mode_sum`), when the piece of the cycle map
+    changes every cycle and cannot be followed. Events of different nodes may pass each
+    other on the way (the map is continuous across such changes of piece), but the step
+    ends where the first node's slip or opening shrinks to nothing (:func:`_before_a_stop`):
+    that node stops there for good, with the slip plain cycling leaves it.
+
+    ``x_next`` = Φ(x) is the start after the cycle just run and ``increment`` = Φ(x) − x.
+    The step is further shortened (halved, at most three times) until its target
+    satisfies the friction and contact inequalities at θ = 0. It is a guess: the next
+    cycle checks it. Steps below ``drift_tol``/1000 [m] are not taken.
+
+    Returns
+    -------
+    target : (2N,) array or None
+    remaining : float
+        The slow modes' whole remaining distance, max |Σ_{k≥1} λᵏ z| [m] (before any
+        shortening): a state whose residual is below the tolerance is steady only when
+        this is too; 0 where the cycle is not on a piece.
+    """
+    jac = cycle_jacobian(evo.jacobian_log, system.K, system.friction)
+    if jac is None or jac.S.size == 0:
+        return None, 0.0
+    outside = np.ones(increment.size, bool)
+    outside[jac.S] = False
+    if np.any(np.abs(increment[outside]) > 1e-3 * drift_tol):
+        return None, 0.0  # a change that no event of the cycle makes: drift, or not a piece
+    extra = slow_mode_sum(jac, increment[jac.S])
+    if not np.all(np.isfinite(extra)):
+        return None, 0.0
+    remaining = float(np.max(np.abs(extra), initial=0.0))
+    extra = extra * _before_a_stop(jac, evo.episode_log, increment[jac.S], extra)
+    if np.max(np.abs(extra), initial=0.0) <= 1e-3 * drift_tol:
+        return None, remaining
+    for alpha in (1.0, 0.5, 0.25, 0.125):
+        target = x_next.copy()
+        target[jac.S] += alpha * extra
+        if _admissible(evo, system, target, r_w0):
+            return target, remaining
+    return None, remaining
+
+
+def _before_a_stop(jac, episode_log: list, d: np.ndarray, extra: np.ndarray) -> float:
+    """The largest fraction α ≤ 1 of a slow-mode step before which no node stops: no
+    node's interval of slip or separation shrinks to nothing, and no event leaves its load
+    segment (a node that slipped on through a load sample may stop there instead). A node
+    that stops keeps for good the slip plain cycling leaves it, which a longer step would
+    move on.
+
+    On the piece, the events of the cycle from x + p move by δt = −c(p)/ġ
+    (:meth:`~slipcycle.discrete.periodic.CycleJacobian.event_shift`), linear in p: the
+    start after the recorded cycle is p = d, the step's target p = d + α·extra. Limits
+    that the next cycle crosses already (α = 0) are plain cycling's own and do not bind.
+    """
+    if jac.rate is None or jac.time is None:
+        return 1.0
+    iv = ModeIntervals.from_log(episode_log, INTERVAL_TOL)
+
+    def shifts(p):
+        c = np.empty(jac.U.shape[0])
+        _apply_map_coefficients(jac.U, jac.A, p.copy(), c)
+        return np.concatenate([jac.event_shift(c), [0.0]])  # index −1: does not move
+
+    s0, s1 = shifts(d), shifts(extra)
+    # a stick between two slips that vanishes joins them: the node slips on, and its
+    # slip is set by its friction limit, not by its memory
+    frees = np.isin(iv.mode, (SLIP_POS, SLIP_NEG, SEPARATED))
+    room = [(iv.length + s0[iv.end] - s0[iv.start])[frees] + iv.tol[frees],
+            (jac.hi - jac.time - s0[:-1]) + SEGMENT_TOL,          # to the segment's end
+            (jac.time + s0[:-1] - jac.lo) + SEGMENT_TOL]          # to its start
+    use = [(s1[iv.end] - s1[iv.start])[frees], s1[:-1], -s1[:-1]]
+    alpha = 1.0
+    for r, u in zip(room, use, strict=True):
+        hit = np.isfinite(r) & (r >= 0) & (r + u < 0)
+        if hit.any():
+            alpha = min(alpha, float(np.min(r[hit] / -u[hit])))
+    return max(alpha, 0.0)
 
 
 @dataclass
@@ -283,7 +393,7 @@ def initial_state(system: FrictionalSystem, r_w: np.ndarray, v0: np.ndarray,
 def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
              steps_per_cycle: int = 100, initial_slip: np.ndarray | None = None,
              protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,
-             record: bool = True, accelerate: bool | None = None,
+             record: bool = True, accelerate: bool | None = None, slow_modes: bool = False,
              progress: Callable[[float, float], None] | None = None) -> SteadyResult:
     """Run load cycles to the steady state.
 
@@ -313,6 +423,15 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         Step to the periodic state once two consecutive cycles share one sequence of modes
         and events (:mod:`~slipcycle.discrete.periodic`), then check it by an exact cycle;
         ``False``: plain cycling. Default (None): on for N ≥ :data:`ACCELERATE_MIN_NODES`.
+    slow_modes : bool
+        With the steps on: where no step has been found for :data:`SLOW_AFTER` cycles
+        (the piece of the cycle map changes every cycle), also step along the slow modes
+        of the cycle's Jacobian, each step ending where the first node stops
+        (:func:`_slow_mode_target`); a residual below ``tol`` is then steady only when
+        the slow modes' remaining distance is too. Off by default: a stuck node that
+        reaches its friction limit during such a step is not seen, so the stuck nodes'
+        memory is plain cycling's only approximately (on the 401-node FE block, to 6e-7
+        of the state, D to 1e-6).
     progress : callable, optional
         ``progress(cycles_done, cycles)``, called after each cycle (a progress bar); the run
         may stop before ``cycles`` at its steady state.
@@ -333,15 +452,18 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     state, residual, totals = "not_converged", np.inf, None
     ratchet = np.zeros(n)
     accel = (n >= ACCELERATE_MIN_NODES) if accelerate is None else bool(accelerate)
-    jstats = {"periodic_steps": 0, "periodic_steps_rejected": 0, "cycles_discarded": 0}
+    jstats = {"periodic_steps": 0, "periodic_steps_rejected": 0, "cycles_discarded": 0,
+              "slow_mode_steps": 0, "slow_mode_steps_rejected": 0}
     targets = set()        # indices into ``starts`` that are targets of a periodic step
     saved = None           # what to restore if the cycle checking a periodic step fails
     rejects_left, wait = MAX_PERIODIC_REJECTIONS, 0
+    slow_left = MAX_SLOW_REJECTIONS if slow_modes else 0
+    no_step = 0            # cycles in a row in which the follower found no step
     moving_prev = None     # nodes the events of the last kept cycle moved
     inequalities = False   # record the inequalities too (the last attempt asked for them)
     for c in range(cycles):
         # record what a step needs only in a cycle that may attempt one
-        attempt = accel and rejects_left > 0 and wait == 0
+        attempt = accel and (rejects_left > 0 or slow_left > 0) and wait == 0
         evo.jacobian_log = [] if attempt else None
         evo.margin_log = [] if attempt and inequalities else None
         inequalities = False
@@ -364,7 +486,11 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         moving = frozenset(np.flatnonzero((totals.slip_length > 1e-3 * tol * xscale)
                                           | totals.separated).tolist()) if accel else None
         refuse = False
-        if checking is not None and checking[5] is not None:
+        if checking is not None and checking[5] is SLOW:
+            # a slow-mode step: the cycle from it must not creep off (a step off its
+            # piece lands where the residual grows)
+            refuse = residual > SLOW_GROWTH * checking[3]
+        elif checking is not None and checking[5] is not None:
             # a skip: the checking cycle must land where plain cycling goes
             skip = float(np.max(np.abs(starts[-2] - checking[0])))
             refuse = (np.max(np.abs(starts[-1] - checking[5]))
@@ -383,6 +509,11 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         same = moving_prev is not None and moving == moving_prev   # the same nodes slipped
         polish = (accel and rejects_left > 0 and c + 1 < cycles and same
                   and checking is None and residual > POLISH * tol)
+        # where slow-mode steps are on, a residual below the tolerance is not yet steady:
+        # the creep's remaining distance is about residual / (1 − λ), and the next slow-mode
+        # step says whether it is below the tolerance (else it takes the step)
+        polish = polish or (slow_left > 0 and c + 1 < cycles and no_step >= SLOW_AFTER
+                            and attempt and residual > POLISH * tol)
         if residual <= tol and c + 1 >= min_cycles and not polish:
             state = "steady"
             break
@@ -396,10 +527,15 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
             starts[-1], evo.modes, totals, residual, moving_prev = checking[:5]
             evo.x = starts[-1].copy()
             evo.resync()
+            slow = checking[5] is SLOW
             jstats["periodic_steps_rejected"] += 1
+            jstats["slow_mode_steps_rejected"] += slow
             jstats["cycles_discarded"] += 1
-            rejects_left -= 1
-            wait = 2
+            if slow:
+                slow_left -= 1
+            else:
+                rejects_left -= 1
+            wait = 1 if slow else 2
             if residual <= tol and c + 1 >= min_cycles:
                 state = "steady"      # the state the refused polishing step started from
                 break
@@ -415,16 +551,33 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
                 residual = rres
                 state = "ratcheting"
                 break
-        if attempt and c + 1 < cycles and same:
+        if attempt and c + 1 < cycles and same and rejects_left > 0:
             # the same nodes moved in the last two cycles: the cycle map is on one piece
             step = _periodic_target(evo, system, starts[-2], d1, vals[0], tol * xscale)
+        else:
+            step = None
+        if attempt and c + 1 < cycles:
             inequalities = step is RECORD
             target, predicted = (None, None) if step is None or step is RECORD else step
-            if target is None and residual <= tol:
+            no_step = no_step + 1 if target is None else 0
+            settled = True     # no slow mode says the state is still far from periodic
+            if target is None and slow_left > 0 and no_step >= SLOW_AFTER:
+                # the piece changes every cycle: step along the slow modes of this one
+                # (where the state creeps: the last increment kept half of the one before)
+                creep = (len(starts) < 3 or len(starts) - 2 in targets
+                         or np.max(np.abs(d1)) >= SLOW_CREEP
+                         * np.max(np.abs(starts[-2] - starts[-3])))
+                if creep:
+                    target, remaining = _slow_mode_target(evo, system, starts[-1], d1,
+                                                          vals[0], tol * xscale)
+                    predicted = SLOW
+                    settled = remaining <= tol * xscale
+            if target is None and residual <= tol and c + 1 >= min_cycles and settled:
                 state = "steady"
                 break
             if target is not None:
                 jstats["periodic_steps"] += 1
+                jstats["slow_mode_steps"] += predicted is SLOW
                 saved = (starts[-1].copy(), evo.modes.copy(), totals, residual, moving,
                          predicted)
                 starts[-1] = target
