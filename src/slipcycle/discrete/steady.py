@@ -430,8 +430,8 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         (:func:`_slow_mode_target`); a residual below ``tol`` is then steady only when
         the slow modes' remaining distance is too. Off by default: a stuck node that
         reaches its friction limit during such a step is not seen, so the stuck nodes'
-        memory is plain cycling's only approximately (on the 401-node FE block, to 6e-7
-        of the state, D to 1e-6).
+        memory is plain cycling's only approximately (on the 401-node FE block, to 1e-6
+        of the state, and D to 1e-6).
     progress : callable, optional
         ``progress(cycles_done, cycles)``, called after each cycle (a progress bar); the run
         may stop before ``cycles`` at its steady state.
