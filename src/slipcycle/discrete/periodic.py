@@ -89,6 +89,13 @@ class CycleJacobian:
         c_e = a_eᵀ M_{e−1} d of the factors: δt_e = −c_e / ġ_e [rad]."""
         return -c / self.rate
 
+    def events_moved_by(self, d: np.ndarray) -> np.ndarray:
+        """(E,) how far each event moves for a start moved by d (m,) on S [rad]
+        (:meth:`event_shift` of the coefficients of M d)."""
+        c = np.empty(self.U.shape[0])
+        _apply_map_coefficients(self.U, self.A, d.copy(), c)
+        return self.event_shift(c)
+
     def apply(self, v: np.ndarray) -> np.ndarray:
         """(I − M) v for v (m,)."""
         return v - _apply_map(self.U, self.A, v.copy())
@@ -434,13 +441,18 @@ class ModeIntervals:
         return cls(ep[:, 1].astype(int), ep[:, 3].astype(int), ep[:, 4] - ep[:, 2],
                    np.full(ep.shape[0], tol), ep[:, 5].astype(int))
 
+    def change(self, shift: np.ndarray) -> np.ndarray:
+        """(k,) change of every interval's length when the events move by ``shift``
+        (E,) [rad]."""
+        s = np.concatenate([shift, [0.0]])              # index −1: does not move
+        return s[self.end] - s[self.start]
+
     def hold(self, shift: np.ndarray) -> bool:
         """Whether every interval keeps a non-negative length when the events move by
         ``shift`` (E,) [rad]."""
         if self.length.size == 0:
             return True
-        s = np.concatenate([shift, [0.0]])              # index −1: does not move
-        return bool(np.all(self.length + s[self.end] - s[self.start] >= -self.tol))
+        return bool(np.all(self.length + self.change(shift) >= -self.tol))
 
 
 @dataclass(frozen=True)

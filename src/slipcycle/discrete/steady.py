@@ -35,9 +35,9 @@ from slipcycle.discrete.model import SEPARATED, SLIP_NEG, SLIP_POS, FrictionalSy
 from slipcycle.discrete.periodic import (
     ROUND_OFF,
     SEGMENT_TOL,
+    CycleJacobian,
     ModeIntervals,
     PieceConstraints,
-    _apply_map_coefficients,
     cycle_jacobian,
     follow_piece,
     piece_constraints,
@@ -118,15 +118,31 @@ def _same_piece(moving: frozenset, moving_step: frozenset, totals, force_tol: fl
     return bool(np.all(totals.min_margin[gone] <= force_tol)) if gone.size else True
 
 
-def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
-                     increment: np.ndarray, r_w0: np.ndarray, drift_tol: float):
+def _cycle_piece(evo: Evolution, system: FrictionalSystem, increment: np.ndarray,
+                 drift_tol: float) -> CycleJacobian | None:
+    """The Jacobian of the cycle just run (increment Φ(x) − x), with its event rates and
+    segments, or None where the cycle is not on one piece of the map: a coordinate
+    changed that no event of the cycle moves (a drift)."""
+    jac = cycle_jacobian(evo.jacobian_log, system.K, system.friction)
+    if jac is None or jac.rate is None:
+        return None
+    outside = np.ones(increment.size, bool)
+    outside[jac.S] = False
+    if np.any(np.abs(increment[outside]) > 1e-3 * drift_tol):
+        return None
+    return jac
+
+
+def _periodic_target(evo: Evolution, system: FrictionalSystem, jac: CycleJacobian,
+                     x: np.ndarray, increment: np.ndarray, r_w0: np.ndarray,
+                     drift_tol: float):
     """Where plain cycling from ``x`` goes, found without running its cycles (the cycle
     map is piecewise affine: :mod:`~slipcycle.discrete.periodic`).
 
-    ``increment`` = Φ(x) − x of the cycle just run, whose Jacobian, event rates and
-    segments, mode intervals and inequalities ``evo`` recorded. Plain cycling is followed
-    on that piece of the map, one product by the cycle's Jacobian per cycle
-    (:func:`~slipcycle.discrete.periodic.follow_piece`):
+    ``increment`` = Φ(x) − x of the cycle just run, whose Jacobian ``jac``
+    (:func:`_cycle_piece`), mode intervals and inequalities ``evo`` recorded. Plain
+    cycling is followed on that piece of the map, one product by the cycle's Jacobian per
+    cycle (:func:`~slipcycle.discrete.periodic.follow_piece`):
 
     - if it stays on the piece until its increments fall below a thousandth of the
       cycling tolerance, the answer is where it arrives: the periodic state of the piece
@@ -147,13 +163,6 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
         ``predicted`` is None for a periodic state; :data:`RECORD` asks for the
         inequalities in the next cycle.
     """
-    jac = cycle_jacobian(evo.jacobian_log, system.K, system.friction)
-    if jac is None or jac.rate is None:
-        return None
-    outside = np.ones(increment.size, bool)
-    outside[jac.S] = False
-    if np.any(np.abs(increment[outside]) > 1e-3 * drift_tol):
-        return None     # a change that no event of the cycle makes: drift, or not a piece
     intervals = ModeIntervals.from_log(evo.episode_log, INTERVAL_TOL)
     tiny = 1e-3 * drift_tol
     # the events and mode intervals alone first (O(E) per cycle followed): most refusals
@@ -196,8 +205,9 @@ def _admissible(evo: Evolution, system: FrictionalSystem, x: np.ndarray,
     return not bad.any()
 
 
-def _slow_mode_target(evo: Evolution, system: FrictionalSystem, x_next: np.ndarray,
-                      increment: np.ndarray, r_w0: np.ndarray, drift_tol: float):
+def _slow_mode_target(evo: Evolution, system: FrictionalSystem, jac: CycleJacobian,
+                      x_next: np.ndarray, increment: np.ndarray, r_w0: np.ndarray,
+                      drift_tol: float):
     """Where plain cycling creeps to along the slow eigenvectors of the cycle's Jacobian
     (:func:`~slipcycle.discrete.periodic.slow_mode_sum`), when the piece of the cycle map
     changes every cycle and cannot be followed. Events of different nodes may pass each
@@ -205,7 +215,8 @@ def _slow_mode_target(evo: Evolution, system: FrictionalSystem, x_next: np.ndarr
     ends where the first node's slip or opening shrinks to nothing (:func:`_before_a_stop`):
     that node stops there for good, with the slip plain cycling leaves it.
 
-    ``x_next`` = Φ(x) is the start after the cycle just run and ``increment`` = Φ(x) − x.
+    ``x_next`` = Φ(x) is the start after the cycle just run, ``increment`` = Φ(x) − x and
+    ``jac`` its Jacobian (:func:`_cycle_piece`).
     The step is further shortened (halved, at most three times) until its target
     satisfies the friction and contact inequalities at θ = 0. It is a guess: the next
     cycle checks it. Steps below ``drift_tol``/1000 [m] are not taken.
@@ -216,15 +227,8 @@ def _slow_mode_target(evo: Evolution, system: FrictionalSystem, x_next: np.ndarr
     remaining : float
         The slow modes' whole remaining distance, max |Σ_{k≥1} λᵏ z| [m] (before any
         shortening): a state whose residual is below the tolerance is steady only when
-        this is too; 0 where the cycle is not on a piece.
+        this is too.
     """
-    jac = cycle_jacobian(evo.jacobian_log, system.K, system.friction)
-    if jac is None or jac.S.size == 0:
-        return None, 0.0
-    outside = np.ones(increment.size, bool)
-    outside[jac.S] = False
-    if np.any(np.abs(increment[outside]) > 1e-3 * drift_tol):
-        return None, 0.0  # a change that no event of the cycle makes: drift, or not a piece
     extra = slow_mode_sum(jac, increment[jac.S])
     if not np.all(np.isfinite(extra)):
         return None, 0.0
@@ -240,7 +244,8 @@ def _slow_mode_target(evo: Evolution, system: FrictionalSystem, x_next: np.ndarr
     return None, remaining
 
 
-def _before_a_stop(jac, episode_log: list, d: np.ndarray, extra: np.ndarray) -> float:
+def _before_a_stop(jac: CycleJacobian, episode_log: list, d: np.ndarray,
+                   extra: np.ndarray) -> float:
     """The largest fraction α ≤ 1 of a slow-mode step before which no node stops: no
     node's interval of slip or separation shrinks to nothing, and no event leaves its load
     segment (a node that slipped on through a load sample may stop there instead). A node
@@ -248,27 +253,19 @@ def _before_a_stop(jac, episode_log: list, d: np.ndarray, extra: np.ndarray) -> 
     move on.
 
     On the piece, the events of the cycle from x + p move by δt = −c(p)/ġ
-    (:meth:`~slipcycle.discrete.periodic.CycleJacobian.event_shift`), linear in p: the
+    (:meth:`~slipcycle.discrete.periodic.CycleJacobian.events_moved_by`), linear in p: the
     start after the recorded cycle is p = d, the step's target p = d + α·extra. Limits
     that the next cycle crosses already (α = 0) are plain cycling's own and do not bind.
     """
-    if jac.rate is None or jac.time is None:
-        return 1.0
     iv = ModeIntervals.from_log(episode_log, INTERVAL_TOL)
-
-    def shifts(p):
-        c = np.empty(jac.U.shape[0])
-        _apply_map_coefficients(jac.U, jac.A, p.copy(), c)
-        return np.concatenate([jac.event_shift(c), [0.0]])  # index −1: does not move
-
-    s0, s1 = shifts(d), shifts(extra)
+    s0, s1 = jac.events_moved_by(d), jac.events_moved_by(extra)
     # a stick between two slips that vanishes joins them: the node slips on, and its
     # slip is set by its friction limit, not by its memory
     frees = np.isin(iv.mode, (SLIP_POS, SLIP_NEG, SEPARATED))
-    room = [(iv.length + s0[iv.end] - s0[iv.start])[frees] + iv.tol[frees],
-            (jac.hi - jac.time - s0[:-1]) + SEGMENT_TOL,          # to the segment's end
-            (jac.time + s0[:-1] - jac.lo) + SEGMENT_TOL]          # to its start
-    use = [(s1[iv.end] - s1[iv.start])[frees], s1[:-1], -s1[:-1]]
+    room = [(iv.length + iv.change(s0))[frees] + iv.tol[frees],
+            (jac.hi - jac.time - s0) + SEGMENT_TOL,               # to the segment's end
+            (jac.time + s0 - jac.lo) + SEGMENT_TOL]               # to its start
+    use = [iv.change(s1)[frees], s1, -s1]
     alpha = 1.0
     for r, u in zip(room, use, strict=True):
         hit = np.isfinite(r) & (r >= 0) & (r + u < 0)
@@ -551,25 +548,30 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
                 residual = rres
                 state = "ratcheting"
                 break
-        if attempt and c + 1 < cycles and same and rejects_left > 0:
-            # the same nodes moved in the last two cycles: the cycle map is on one piece
-            step = _periodic_target(evo, system, starts[-2], d1, vals[0], tol * xscale)
-        else:
-            step = None
         if attempt and c + 1 < cycles:
+            # the follower where the same nodes moved in the last two cycles (the cycle
+            # map on one piece), then the slow modes where it found no step for a while
+            follow = same and rejects_left > 0
+            jac = (_cycle_piece(evo, system, d1, tol * xscale)
+                   if follow or (slow_left > 0 and no_step + 1 >= SLOW_AFTER) else None)
+            step = None
+            if follow and jac is not None:
+                step = _periodic_target(evo, system, jac, starts[-2], d1, vals[0],
+                                        tol * xscale)
             inequalities = step is RECORD
             target, predicted = (None, None) if step is None or step is RECORD else step
             no_step = no_step + 1 if target is None else 0
             settled = True     # no slow mode says the state is still far from periodic
-            if target is None and slow_left > 0 and no_step >= SLOW_AFTER:
+            if (target is None and jac is not None and slow_left > 0
+                    and no_step >= SLOW_AFTER):
                 # the piece changes every cycle: step along the slow modes of this one
                 # (where the state creeps: the last increment kept half of the one before)
                 creep = (len(starts) < 3 or len(starts) - 2 in targets
                          or np.max(np.abs(d1)) >= SLOW_CREEP
                          * np.max(np.abs(starts[-2] - starts[-3])))
                 if creep:
-                    target, remaining = _slow_mode_target(evo, system, starts[-1], d1,
-                                                          vals[0], tol * xscale)
+                    target, remaining = _slow_mode_target(evo, system, jac, starts[-1],
+                                                          d1, vals[0], tol * xscale)
                     predicted = SLOW
                     settled = remaining <= tol * xscale
             if target is None and residual <= tol and c + 1 >= min_cycles and settled:
