@@ -175,15 +175,16 @@ def surface_node_count(mesh: MeshTet, facets: np.ndarray, element: str) -> int:
     return int(np.count_nonzero(node_areas(mesh, facets, element)))
 
 
-def check_reduction_memory(solid: MeshSolid, extra: float = 0.0,
-                           contact: str = "contact") -> None:
+def check_reduction_memory(solid: MeshSolid, extra=None, contact: str = "contact") -> None:
     """Refuse (:class:`CaseError` naming ``fe.mesh.contact``) a contact surface whose dense
-    reduced stiffness (3N)², with the condensation's copies of it, and ``extra`` bytes
-    (what solves it) exceed the memory budget (:func:`slipcycle.io.sizes.check_memory`)."""
+    reduced stiffness (3N)², with the condensation's copies of it, and ``extra(N)`` bytes
+    (what solves it, for N contact nodes) exceed the memory budget
+    (:func:`slipcycle.io.sizes.check_memory`)."""
     from slipcycle.io.sizes import check_memory
 
     n = surface_node_count(solid.mesh, solid.surfaces[contact], solid.element)
-    check_memory("fe.mesh.contact", 4 * 8.0 * (3 * n) ** 2 + extra, f"{n} contact nodes",
+    more = 0.0 if extra is None else extra(n)
+    check_memory("fe.mesh.contact", 4 * 8.0 * (3 * n) ** 2 + more, f"{n} contact nodes",
                  advice="coarsen the mesh on the contact surface")
 
 

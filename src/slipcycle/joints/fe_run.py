@@ -46,7 +46,6 @@ from slipcycle.fe.meshfile3d import (
     MeshSolid,
     check_reduction_memory,
     reduce_mesh_case,
-    surface_node_count,
 )
 from slipcycle.fe.model import (
     build_problem,
@@ -180,9 +179,8 @@ def read_fe_case(case: Case) -> FECase:
     table = read_discrete_table(fe)
     if isinstance(problem, MeshSolid):
         discrete3d_load_terms(table, [d["name"] for d in problem.loads] + ["gap"])
-        n = surface_node_count(problem.mesh, problem.surfaces["contact"], problem.element)
-        check_reduction_memory(problem, run_bytes(2 * n, table["steps_per_cycle"],
-                                                  table["cycles"], True))
+        check_reduction_memory(problem, lambda n: run_bytes(
+            2 * n, table["steps_per_cycle"], table["cycles"], True))
         return FECase(case, problem, geometry, None, conv["refinements"], conv["rtol"],
                       table)
     names = [c.name for c in problem.cases]
