@@ -151,3 +151,74 @@ def test_node_at_the_apex_of_its_friction_limit_may_open():
     assert modes[0] == SEPARATED
     assert xd[1] == 0.25
     assert rd[1] == 0.0
+
+
+def _critical_state(rng, n: int, f: float, tol: float):
+    """A state (x, r) with every kind of node: stuck inside its cone, stuck at q = −f p or
+    q = +f p, in contact at p = 0, separated with a gap, separated with the gap closed."""
+    x = np.zeros(2 * n)
+    r = np.zeros(2 * n)
+    for j in range(n):
+        kind = rng.integers(6)
+        p = rng.uniform(0.5, 2.0)
+        x[j] = rng.normal()
+        if kind == 0:
+            r[j], r[n + j] = rng.uniform(-0.5, 0.5) * f * p, p
+        elif kind in (1, 2):
+            r[j], r[n + j] = (-f * p if kind == 1 else f * p), p
+        elif kind == 3:
+            r[j], r[n + j] = 0.0, 0.0
+        elif kind == 4:
+            x[n + j] = rng.uniform(0.1, 1.0)
+        # kind 5: separated at w = 0 (q = p = 0 and no gap): in contact at p = 0
+    return x, r
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(1, 12))
+def test_compiled_pivoting_solves_the_rate_problem_as_lemkes_method_does(seed, n):
+    """At states with nodes on every kind of inequality (friction limits both ways, p = 0,
+    open gaps) and random load rates, the compiled block pivoting returns rates that keep
+    every active inequality (complementarity: a slipping node slips the way its friction
+    force allows and keeps q = ∓f p, a stuck node at a limit does not cross it, a node at
+    p = 0 does not pull, an open node carries nothing) and that equal those of Lemke's
+    method on the LCP of the critical nodes (unique for this P-matrix system)."""
+    system = _system(seed, n)
+    rng = np.random.default_rng(seed + 3)
+    f = float(system.friction[0])
+    solver = RateSolver(system, 1e-12)
+    x, r = _critical_state(rng, n, f, 1e-12)
+    rw = rng.normal(size=2 * n)
+    guess = rng.integers(0, 4, n).astype(np.int8)
+    modes, xd, rd = solver.solve(x, r, rw, guess)
+    K = system.K
+    scale = np.abs(rw).max() + np.abs(K).max() * np.abs(xd).max()
+    tol = 1e-9 * scale
+    np.testing.assert_allclose(rd, rw + K @ xd, rtol=0, atol=tol)
+    q, p, w = r[:n], r[n:], x[n:]
+    qd, pd, vd, wd = rd[:n], rd[n:], xd[:n], xd[n:]
+    for j in range(n):
+        m = modes[j]
+        if m == SEPARATED:
+            assert abs(qd[j]) <= tol and abs(pd[j]) <= tol
+            if w[j] == 0:
+                assert wd[j] >= -tol
+            continue
+        assert abs(wd[j]) <= tol and w[j] == 0            # in contact
+        if p[j] <= 1e-12:
+            assert pd[j] >= -tol                          # does not pull at p = 0
+        if m == STICK:
+            assert vd[j] == 0
+            if f * p[j] + q[j] <= 1e-12:
+                assert f * pd[j] + qd[j] >= -tol
+            if f * p[j] - q[j] <= 1e-12:
+                assert f * pd[j] - qd[j] >= -tol
+        elif m == SLIP_POS:
+            assert vd[j] >= -tol and abs(f * pd[j] + qd[j]) <= tol
+        else:
+            assert vd[j] <= tol and abs(f * pd[j] - qd[j]) <= tol
+    flags = solver.flags(x, r)
+    rate_tol = 1e-9 * float(np.abs(rw).max()) + 1e-300
+    _, xd_lemke, rd_lemke = solver._lemke(x, r, rw, flags, rate_tol)
+    np.testing.assert_allclose(xd, xd_lemke, rtol=0, atol=1e-7 * (np.abs(xd).max() + 1e-300))
+    np.testing.assert_allclose(rd, rd_lemke, rtol=0, atol=1e-7 * scale)

@@ -122,7 +122,9 @@ def _store_arrays(out: Path) -> dict:
 
 def test_resume_after_kills_at_random_moments_is_bit_identical(run_cli, write_case,
                                                                tmp_path):
-    case = write_case(small_case(steps=150))
+    # cells of about 0.15 s (3000 load samples per cycle), so that a kill lands while
+    # cells are being computed, not after the last one
+    case = write_case(small_case(steps=3000))
     ref = tmp_path / "ref"
     code, _, err = run_cli("sweep", case, "--set", GRID, "--out", ref,
                            "--workers", "1", "--no-progress")

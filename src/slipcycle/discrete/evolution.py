@@ -309,12 +309,13 @@ class Evolution:
 
     def _close_episodes(self, nodes: np.ndarray, event: int, theta: float) -> None:
         """End the current mode interval of ``nodes`` at ``theta`` (by ``event``, or −1)."""
-        s_ev, s_th = self._episode_event, self._episode_theta
-        for j in nodes[(s_ev[nodes] >= 0) | (event >= 0)]:
-            self.episode_log.append((int(j), int(s_ev[j]), float(s_th[j]), event, theta,
-                                     int(self.modes[j])))
-        s_ev[nodes] = event
-        s_th[nodes] = theta
+        s_ev, s_th, log = self._episode_event, self._episode_theta, self.episode_log
+        for j in nodes.tolist():          # one or two nodes at an event: plain ints
+            if s_ev[j] >= 0 or event >= 0:
+                log.append((j, int(s_ev[j]), float(s_th[j]), event, theta,
+                            int(self.modes[j])))
+            s_ev[j] = event
+            s_th[j] = theta
 
     def _margins(self, m: np.ndarray, x: np.ndarray, r: np.ndarray) -> np.ndarray:
         """The inequalities the modes ``m`` must keep, per node (4, N): f p + q and

@@ -138,8 +138,10 @@ def cycle_jacobian(log: list, K: np.ndarray, friction: np.ndarray,
     kinds = np.array([e[0] for e in log])
     nodes = np.array([e[1] for e in log])
     U = np.zeros((E, m))
-    for k, e in enumerate(log):
-        U[k, np.searchsorted(S, e[2])] = e[3]
+    sizes = [e[2].size for e in log]
+    U[np.repeat(np.arange(E), sizes),
+      np.searchsorted(S, np.concatenate([e[2] for e in log]))] = np.concatenate(
+          [e[3] for e in log])
     timing = {}
     if all(len(e) >= 8 for e in log):
         timing = {name: np.array([e[i] for e in log], float)
@@ -389,7 +391,7 @@ def _gradients(kind: np.ndarray, node: np.ndarray, S: np.ndarray, K: np.ndarray,
     return np.ascontiguousarray(G)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={"reassoc", "contract"})
 def _apply_map_coefficients(U, A, v, c):
     """M v in place, with the coefficient c_e = a_eᵀ (M_{e−1} v) of every factor in c."""
     E, m = U.shape

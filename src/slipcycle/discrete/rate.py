@@ -33,7 +33,10 @@ by the last (swap-delete), O(N) per changed unknown, never a gather over all of 
 then costs O(k² + kN) and streams 8(k² + 2kN) bytes once, in a compiled single-threaded
 loop (:func:`_mode_rates`); an event with r nodes changing state adds O(k² r + r N) for
 the updates (low-rank updates of an inverse: Golub & Van Loan, *Matrix Computations*,
-4th ed., §2.1.4).
+4th ed., §2.1.4). The pivoting, the updates and the rates of one rate problem run in one
+compiled call (:func:`_pivot`), which returns to Python only to factorize a mode system
+from scratch or to grow the buffers; at a few hundred nodes the per-event cost is then
+the O(kN) pass over K rather than the interpreter.
 
 References
 ----------
@@ -54,8 +57,12 @@ from slipcycle.errors import SolverError
 
 __all__ = ["RateSolver", "RateProblemError"]
 
+#: the dot products of the kernels may be summed in any order (vectorised); no other
+#: fast-math licence, so that a zero or non-finite pivot is still seen
+_REASSOC = {"reassoc", "contract"}
 
-@njit(cache=True)
+
+@njit(cache=True, fastmath=_REASSOC)
 def _mode_rates(Minv, Kr, b, rw):
     """Rates of the unknowns ``sol = −Minv b`` and reaction rates ṙ = ṙ^w + K ẋ, with
     K ẋ = Σ_a sol_a K[col_a] over the unknowns' rows of the symmetric K: one streaming
@@ -77,7 +84,7 @@ def _mode_rates(Minv, Kr, b, rw):
     return sol, rd
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=_REASSOC)
 def _border_one(P, k, bcol, crow, d):
     """Grow the inverse P[:k, :k] of a mode matrix by one unknown, in place in its buffer:
     new column ``bcol`` (k,), row ``crow`` (k,), diagonal ``d``. With Pb = P bcol,
@@ -116,7 +123,7 @@ def _remove_one(P, k, i):
     """Drop unknown ``i`` from the inverse P[:k, :k] of a mode matrix, in place: the
     inverse of the matrix without row and column i is P − P[:, i] P[i, :] / P[i, i]
     restricted to the others (Schur-complement removal); the last unknown then moves
-    into the hole (swap-delete, the order :meth:`RateSolver._remove` keeps). One pass
+    into the hole (swap-delete, the order :func:`_rates_kernel` keeps). One pass
     over k² entries."""
     col = P[:k, i].copy()
     row = P[i, :k].copy()
@@ -134,6 +141,262 @@ def _remove_one(P, k, i):
             P[a, i] = P[a, last]
 
 
+@njit(cache=True)
+def _n_keys(mode):
+    """Number of unknowns of a node in ``mode``: 0 stuck, 1 slipping, 2 separated."""
+    if mode == STICK:
+        return 0
+    if mode == SEPARATED:
+        return 2
+    return 1
+
+
+@njit(cache=True)
+def _node_keys(j, mode, n):
+    """The unknowns' keys of node j in ``mode`` (:meth:`RateSolver._keys`)."""
+    if mode == SLIP_POS:
+        return (4 * j + 1, -1)
+    if mode == SLIP_NEG:
+        return (4 * j + 2, -1)
+    if mode == SEPARATED:
+        return (4 * j + 3, 4 * (n + j) + 3)
+    return (-1, -1)
+
+
+@njit(cache=True)
+def _coefficients(key, f, n):
+    """(column, node, c_q, c_p) of the unknown ``key``: its equation is
+    c_q q̇_j + c_p ṗ_j = 0 and it is the rate of x[column]."""
+    col = key // 4
+    kind = key % 4
+    j = col % n
+    if kind == 1:
+        return col, j, 1.0, f[j]
+    if kind == 2:
+        return col, j, -1.0, f[j]
+    return col, j, 1.0 if col < n else 0.0, 1.0 if col >= n else 0.0
+
+
+@njit(cache=True)
+def _rates_kernel(K, f, modes, sysmodes, unk, state, P, Kr, rw, max_updates):
+    """Update the inverse of the mode system from the modes it holds (``sysmodes``) to
+    ``modes``, node by node (Schur-complement removal of the unknowns that go, bordering
+    with the ones that come), and return the rates for the load rate ``rw``.
+
+    ``state`` holds (number of unknowns k, updates since the last factorization, room
+    asked for). Returns (status, ẋ, ṙ, unknowns changed): status 0 done; 1 refactorize
+    (many changes, many updates, or a zero pivot: the mode matrix is then left invalid);
+    2 the buffers need room for ``state[2]`` unknowns (nothing has changed)."""
+    n = f.size
+    k = state[0]
+    xd = np.zeros(2 * n)
+    if k < 0:                                   # no valid mode system: factorize
+        return 1, xd, rw.copy(), 0
+    nchange = 0
+    target = k
+    for j in range(n):
+        if modes[j] != sysmodes[j]:
+            a = _n_keys(sysmodes[j])
+            b = _n_keys(modes[j])
+            nchange += a + b
+            target += b - a
+    if nchange:
+        if nchange > max(8, target // 2) or state[1] > max_updates:
+            return 1, xd, rw.copy(), 0
+        if target > P.shape[0] or target > Kr.shape[0]:
+            state[2] = target
+            return 2, xd, rw.copy(), 0
+        for j in range(n):
+            if modes[j] == sysmodes[j]:
+                continue
+            old = _node_keys(j, sysmodes[j], n)
+            for key in old:
+                if key < 0:
+                    continue
+                i = 0
+                while i < k and unk[i] != key:
+                    i += 1
+                if i == k:                      # not held: rebuild from scratch
+                    state[0] = -1
+                    return 1, xd, rw.copy(), 0
+                _remove_one(P, k, i)
+                if i != k - 1:
+                    Kr[i, :] = Kr[k - 1, :]
+                    unk[i] = unk[k - 1]
+                k -= 1
+        for j in range(n):
+            if modes[j] == sysmodes[j]:
+                continue
+            for key in _node_keys(j, modes[j], n):
+                if key < 0:
+                    continue
+                col, jn, cqn, cpn = _coefficients(key, f, n)
+                bcol = np.empty(k)
+                crow = np.empty(k)
+                for a in range(k):
+                    ca, ja, cqa, cpa = _coefficients(unk[a], f, n)
+                    bcol[a] = cqa * K[ja, col] + cpa * K[n + ja, col]
+                    crow[a] = cqn * K[jn, ca] + cpn * K[n + jn, ca]
+                d = cqn * K[jn, col] + cpn * K[n + jn, col]
+                sch = _border_one(P, k, bcol, crow, d)
+                if sch == 0.0 or not np.isfinite(sch):
+                    state[0] = -1
+                    return 1, xd, rw.copy(), 0
+                Kr[k, :] = K[col, :]
+                unk[k] = key
+                k += 1
+            sysmodes[j] = modes[j]
+        state[0] = k
+        state[1] += nchange
+    b = np.empty(k)
+    for a in range(k):
+        _, ja, cqa, cpa = _coefficients(unk[a], f, n)
+        b[a] = cqa * rw[ja] + cpa * rw[n + ja]
+    sol, rd = _mode_rates(P, Kr, b, rw)
+    for a in range(k):
+        xd[unk[a] // 4] = sol[a]
+    return 0, xd, rd, nchange
+
+
+@njit(cache=True)
+def _start_modes(f, x, r, guess, tol, disp_tol):
+    """Active inequalities at the state (g+, g−, p = 0 in contact, separated), each (N,),
+    and the warm start ``guess`` with the modes they no longer allow set to stick
+    (:meth:`RateSolver.flags`); also whether any node is critical."""
+    n = f.size
+    gp = np.zeros(n, np.bool_)
+    gm = np.zeros(n, np.bool_)
+    p0 = np.zeros(n, np.bool_)
+    sep = np.zeros(n, np.bool_)
+    modes = guess.astype(np.int8)
+    crit = False
+    for j in range(n):
+        q, p = r[j], r[n + j]
+        if x[n + j] > disp_tol:
+            sep[j] = True
+            modes[j] = SEPARATED
+            continue
+        gp[j] = f[j] * p + q <= tol
+        gm[j] = f[j] * p - q <= tol
+        # both sides of the friction limit active means f p ≤ tol: the node is at the
+        # apex, where it may open too (without that option a load that pulls it open
+        # has no rate solution)
+        p0[j] = p <= tol or (gp[j] and gm[j])
+        m = modes[j]
+        if (m == SLIP_POS and not gp[j]) or (m == SLIP_NEG and not gm[j]) or (
+                m == SEPARATED and not p0[j]):
+            modes[j] = STICK
+        crit = crit or gp[j] or gm[j] or p0[j]
+    return gp, gm, p0, sep, modes, crit
+
+
+@njit(cache=True)
+def _violations(modes, gp, gm, p0, sep, f, xd, rd, rate_tol, vtol):
+    """Nodes whose active inequalities fail at the rates (ẋ, ṙ), and the mode to try for
+    each: (number of them, first of them, the modes with theirs switched)."""
+    n = modes.size
+    new = modes.copy()
+    nbad = 0
+    first = -1
+    for j in range(n):
+        qd, pd = rd[j], rd[n + j]
+        vd, wd = xd[j], xd[n + j]
+        p_bad = p0[j] and pd < -rate_tol
+        gp_bad = gp[j] and f[j] * pd + qd < -rate_tol
+        gm_bad = gm[j] and f[j] * pd - qd < -rate_tol
+        m = modes[j]
+        bad = False
+        if m == STICK:
+            if p_bad:
+                new[j], bad = SEPARATED, True
+            elif gp_bad:
+                new[j], bad = SLIP_POS, True
+            elif gm_bad:
+                new[j], bad = SLIP_NEG, True
+        elif m == SLIP_POS or m == SLIP_NEG:
+            wrong = vd < -vtol if m == SLIP_POS else vd > vtol
+            other_bad = gm_bad if m == SLIP_POS else gp_bad
+            if p_bad:
+                new[j], bad = SEPARATED, True
+            elif wrong or other_bad:
+                new[j], bad = STICK, True
+        elif not sep[j] and wd < -vtol:          # separated at w = 0, closing
+            new[j], bad = STICK, True
+        if bad:
+            nbad += 1
+            if first < 0:
+                first = j
+    return nbad, first, new
+
+
+@njit(cache=True)
+def _modes_hash(modes):
+    """64-bit FNV-1a hash of a mode set (the pivoting's record of the sets it tried)."""
+    h = np.uint64(14695981039346656037)
+    for m in modes:
+        h = (h ^ np.uint64(m)) * np.uint64(1099511628211)
+    return np.int64(h)
+
+
+@njit(cache=True)
+def _pivot(K, f, x, r, rw, modes, flags, start, force_tol, disp_tol, vtol_scale, sysmodes,
+           unk, state, P, Kr, max_updates, loop, seen):
+    """Block principal pivoting until no active inequality fails (:meth:`RateSolver.solve`).
+
+    ``start`` 1: begin from the warm start in ``modes`` at the state (x, r), writing the
+    active inequalities (:func:`_start_modes`) into ``flags`` (4, N) and the modes they
+    allow into ``modes``; 2: rates of ``modes`` as they are (no inequality active);
+    0: go on after a return to Python. ``modes`` is changed in place.
+
+    ``loop`` = (iterations left, block switching on, fewest failures so far (−1: none),
+    mode sets tried, any node critical, and the running totals of unknowns changed,
+    pivots and rate solves) carries the iteration over a return to Python, and ``seen``
+    the hashes of the mode sets tried. Returns (status, ẋ, ṙ): 0 solved; 1 factorize the
+    mode system of ``modes`` and call again; 2 make room for ``state[2]`` unknowns and
+    call again; 3 no solution found by pivoting (a mode set repeats, or the iterations
+    run out): Lemke's method."""
+    n = f.size
+    if start:
+        loop[0] = 1 if start == 2 else 4 * n + 20
+        loop[1], loop[2], loop[3], loop[4] = 1, -1, 0, 0
+        if start == 1:
+            gp, gm, p0, sep, m0, crit = _start_modes(f, x, r, modes, force_tol, disp_tol)
+            flags[0, :], flags[1, :], flags[2, :], flags[3, :] = gp, gm, p0, sep
+            modes[:] = m0
+            loop[4] = crit
+    rate_tol = 1e-9 * np.max(np.abs(rw)) + 1e-300 if rw.size else 1e-300
+    vtol = rate_tol * vtol_scale
+    while loop[0] > 0:
+        status, xd, rd, nchange = _rates_kernel(K, f, modes, sysmodes, unk, state, P, Kr,
+                                                rw, max_updates)
+        if status != 0:
+            return status, xd, rd
+        loop[0] -= 1
+        loop[5] += nchange
+        loop[7] += 1
+        if not loop[4]:
+            return 0, xd, rd
+        nbad, first, new = _violations(modes, flags[0], flags[1], flags[2], flags[3], f,
+                                       xd, rd, rate_tol, vtol)
+        if nbad == 0:
+            return 0, xd, rd
+        loop[6] += 1
+        h = _modes_hash(modes)
+        for i in range(loop[3]):
+            if seen[i] == h:
+                return 3, xd, rd
+        seen[loop[3]] = h
+        loop[3] += 1
+        if loop[2] >= 0 and nbad >= loop[2]:
+            loop[1] = 0                         # no progress: one node at a time (Murty)
+        loop[2] = nbad if loop[2] < 0 else min(loop[2], nbad)
+        if loop[1]:
+            modes[:] = new
+        else:
+            modes[first] = new[first]
+    return 3, np.zeros(2 * n), rw.copy()
+
+
 class RateProblemError(SolverError):
     """The rate problem has no (unique) solution: the model is ill posed at this state."""
 
@@ -148,63 +411,44 @@ class RateSolver:
         Absolute tolerance on forces [N] deciding which inequalities are active.
     """
 
+    #: refactorize the mode system after this many updates of its inverse (round-off)
+    MAX_UPDATES = 400
+
     def __init__(self, system: FrictionalSystem, force_tol: float):
         self.sys = system
         self.n = system.n_nodes
         self.K = np.ascontiguousarray(system.K)
-        self.f = np.asarray(system.friction)
+        self.f = np.ascontiguousarray(system.friction, dtype=float)
         self.force_tol = float(force_tol)
         self.disp_tol = self.force_tol / float(np.max(np.diag(system.C)))
-        self._unk: np.ndarray | None = None   # keys of the current mode system's unknowns
-        # its inverse, kept current by O(k²) updates in place: the leading k × k block of
-        # a buffer with room to grow (doubling), so that an event allocates no k × k array
+        self._vtol_scale = 1.0 / float(np.max(np.diag(self.K)))
+        # The mode system: the keys of its unknowns (first k entries of ``_unk``), the modes
+        # it stands for, and its inverse, kept current by O(k²) updates in place: the
+        # leading k × k block of a buffer with room to grow (doubling), so that an event
+        # allocates no k × k array. ``_state`` = (k, updates since the last factorization,
+        # room asked for); k = −1: no valid mode system.
+        self._unk = np.zeros(2 * self.n, np.int64)
+        self._sysmodes = np.zeros(self.n, np.int8)
+        self._state = np.array([-1, 0, 0], np.int64)
+        # the pivoting's state across returns to Python and its running totals
+        # (:func:`_pivot`), the hashes of the mode sets it tried, the active inequalities
+        self._loop = np.zeros(8, np.int64)
+        self._seen = np.zeros(4 * self.n + 20, np.int64)
+        self._flags = np.zeros((4, self.n), np.bool_)
+        self._factorizations = 0
+        self._lemke_calls = 0
         self._P = np.zeros((0, 0))
-        self._updates = 0
-        self._modes_key = None
-        self._arrays = None
         # rows K[col_b] of the unknowns, in the order of ``_unk`` (K is symmetric, so these
         # are its columns; rows of a C-ordered matrix are contiguous): kept current row by
         # row, O(N) per unknown added or removed, never gathered from all of K per event
         self._Kr = np.zeros((0, 2 * self.n))
-        self._mark = np.zeros(8 * self.n + 4, bool)   # scratch for key-set differences
-        self.stats = {"solves": 0, "factorizations": 0, "updates": 0, "pivots": 0,
-                      "lemke": 0}
 
     # -- active inequalities -------------------------------------------------------------
     def flags(self, x: np.ndarray, r: np.ndarray):
         """Active inequalities at state x, reactions r: (g+, g−, p=0 in contact, separated)."""
-        n, f, tol = self.n, self.f, self.force_tol
-        q, p, w = r[:n], r[n:], x[n:]
-        sep = w > self.disp_tol
-        gp = (f * p + q <= tol) & ~sep
-        gm = (f * p - q <= tol) & ~sep
-        # both sides of the friction limit active means f p ≤ tol: the node is at the
-        # apex, where it may open too (without that option a load that pulls it open has
-        # no rate solution)
-        p0 = ((p <= tol) | (gp & gm)) & ~sep
+        gp, gm, p0, sep, _, _ = _start_modes(self.f, x, r, np.zeros(self.n, np.int8),
+                                             self.force_tol, self.disp_tol)
         return gp, gm, p0, sep
-
-    @property
-    def _Minv(self) -> np.ndarray:
-        """The inverse of the current mode matrix (k, k): a view into its buffer."""
-        k = 0 if self._unk is None else self._unk.size
-        return self._P[:k, :k]
-
-    def _room(self, k: int) -> None:
-        """Make the inverse's buffer hold at least k × k (doubling, keeping the content)."""
-        if self._P.shape[0] < k:
-            cap = min(max(2 * k, 16), 2 * self.n)
-            buf = np.empty((cap, cap))
-            kk = 0 if self._unk is None else min(self._unk.size, self._P.shape[0])
-            buf[:kk, :kk] = self._P[:kk, :kk]
-            self._P = buf
-
-    def _store(self, Minv: np.ndarray) -> None:
-        k = Minv.shape[0]
-        if self._P.shape[0] < k:
-            cap = min(max(2 * k, 16), 2 * self.n)
-            self._P = np.empty((cap, cap))
-        self._P[:k, :k] = Minv
 
     # -- rates for a given mode set --------------------------------------------------------
     # Each unknown has an integer key 4*col + kind: col is its index in x = [v, w], kind 1 a
@@ -218,225 +462,90 @@ class RateSolver:
         return np.sort(np.concatenate([4 * slip_p + 1, 4 * slip_n + 2, 4 * sep + 3,
                                        4 * (n + sep) + 3]))
 
-    def _decode(self, keys: np.ndarray):
+    def _entries(self, keys: np.ndarray) -> np.ndarray:
+        """Mode-system matrix M[a, b] = c_q K[j_a, col_b] + c_p K[N + j_a, col_b]."""
         n, f = self.n, self.f
         cols = keys // 4
         kind = keys % 4
         j = cols % n
         cq = np.where(kind == 1, 1.0, np.where(kind == 2, -1.0, (cols < n).astype(float)))
         cp = np.where(kind == 3, (cols >= n).astype(float), f[j])
-        return cols, j, cq, cp
+        return cq[:, None] * self.K[np.ix_(j, cols)] + cp[:, None] * self.K[np.ix_(n + j, cols)]
 
-    def _entries(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """Mode-system entries M[a, b] = c_q K[j_a, col_b] + c_p K[N + j_a, col_b]."""
-        _, j, cq, cp = self._decode(rows)
-        c = cols // 4
-        K = self.K
-        return cq[:, None] * K[j[:, None], c[None, :]] + cp[:, None] * K[(self.n + j)[:, None],
-                                                                          c[None, :]]
-
-    def _rebuild(self, keys: np.ndarray) -> bool:
-        self.stats["factorizations"] += 1
-        self._updates = 0
-        self._unk = keys
-        self._Kr = self._grow(keys.size)
-        self._Kr[:keys.size] = self.K[keys // 4]
-        if keys.size == 0:
-            return True
-        M = self._entries(keys, keys)
-        try:
-            Minv = np.linalg.inv(M)
-        except np.linalg.LinAlgError:
-            self._unk = None
-            return False
-        cond = np.abs(M).sum(axis=0).max() * np.abs(Minv).sum(axis=0).max()
-        if not np.isfinite(cond) or cond > 1e13:
-            self._unk = None
-            return False
-        self._store(Minv)
-        return True
-
-    def _grow(self, k: int) -> np.ndarray:
-        """The row buffer with room for ``k`` unknowns (doubling: amortised O(N) per row)."""
+    def _room(self, k: int) -> None:
+        """Make the buffers hold at least k unknowns (doubling, keeping the content)."""
+        kk = max(int(self._state[0]), 0)
+        if self._P.shape[0] < k:
+            cap = min(max(2 * k, 16), 2 * self.n)
+            buf = np.empty((cap, cap))
+            buf[:kk, :kk] = self._P[:kk, :kk]
+            self._P = buf
         if self._Kr.shape[0] < k:
-            buf = np.empty((max(2 * k, 16), 2 * self.n))
-            kk = 0 if self._unk is None else min(self._Kr.shape[0], self._unk.size)
+            buf = np.empty((min(max(2 * k, 16), 2 * self.n), 2 * self.n))
             buf[:kk] = self._Kr[:kk]
             self._Kr = buf
-        return self._Kr
 
-    def _remove(self, idx: np.ndarray) -> None:
-        """Drop unknowns at positions ``idx``: Schur-complement formula on the inverse.
-
-        The last unknowns move into the holes (swap-delete), so that only the rows of K
-        that change place are copied: O(r N + k² r) for r removed of k unknowns."""
-        buf = self._Kr
-        if idx.size == 1:
-            # one unknown leaves (the usual event): in place, one pass over k² entries
-            i, k = int(idx[0]), self._unk.size
-            _remove_one(self._P, k, i)
-            if i != k - 1:
-                buf[i] = buf[k - 1]
-                self._unk[i] = self._unk[k - 1]
-            self._unk = self._unk[:k - 1].copy()
-            return
-        P = self._Minv
-        order = np.arange(P.shape[0])
-        size = order.size
-        for i in np.sort(idx)[::-1]:
-            size -= 1
-            if i != size:
-                order[i] = order[size]
-                buf[i] = buf[size]
-        keep = order[:size]
-        Pkr = P[np.ix_(keep, idx)]
-        Prk = P[np.ix_(idx, keep)]
-        Prr = P[np.ix_(idx, idx)]
-        self._store(P[np.ix_(keep, keep)] - Pkr @ np.linalg.solve(Prr, Prk))
-        self._unk = self._unk[keep]
-
-    def _add(self, new: np.ndarray) -> bool:
-        """Add unknowns ``new`` by block bordering of the inverse."""
-        old = self._unk
-        if new.size == 1:
-            # one node changes state (the usual event): bordering in place, O(k²)
-            k = old.size
-            self._room(k + 1)
-            bcol = self._entries(old, new)[:, 0]
-            crow = self._entries(new, old)[0]
-            d = float(self._entries(new, new)[0, 0])
-            sch = _border_one(self._P, k, np.ascontiguousarray(bcol),
-                              np.ascontiguousarray(crow), d)
-            if not (np.isfinite(sch) and sch != 0.0):
-                return False
-            buf = self._grow(k + 1)
-            buf[k] = self.K[new[0] // 4]
-            self._unk = np.concatenate([old, new])
-            return True
-        P = self._Minv
-        Bm = self._entries(old, new)          # (k, r) new columns, old rows
-        Cm = self._entries(new, old)          # (r, k) new rows, old columns
-        Dm = self._entries(new, new)          # (r, r)
-        PB = P @ Bm
-        CP = Cm @ P
-        S = Dm - Cm @ PB
-        if S.shape == (1, 1):
-            # one node changes state (the usual event): a scalar pivot, no LAPACK call
-            if not (np.isfinite(S[0, 0]) and S[0, 0] != 0.0):
-                return False
-            Sinv = 1.0 / S
-        else:
+    def _rebuild(self, modes: np.ndarray) -> bool:
+        """Factorize the mode system of ``modes`` from scratch (O(k³))."""
+        self._factorizations += 1
+        keys = self._keys(modes)
+        k = keys.size
+        self._state[:] = (-1, 0, 0)
+        M = self._entries(keys)
+        if k:
             try:
-                Sinv = np.linalg.inv(S)
+                Minv = np.linalg.inv(M)
             except np.linalg.LinAlgError:
                 return False
-        if not np.all(np.isfinite(Sinv)) or (
-                np.abs(S).sum(axis=0).max() * np.abs(Sinv).sum(axis=0).max() > 1e13):
-            return False
-        k, r = P.shape[0], S.shape[0]
-        Q = np.empty((k + r, k + r))
-        PBS = PB @ Sinv
-        Q[:k, :k] = P + PBS @ CP
-        Q[:k, k:] = -PBS
-        Q[k:, :k] = -Sinv @ CP
-        Q[k:, k:] = Sinv
-        buf = self._grow(k + r)
-        buf[k:k + r] = self.K[new // 4]
-        self._store(Q)
-        self._unk = np.concatenate([old, new])
+            cond = np.abs(M).sum(axis=0).max() * np.abs(Minv).sum(axis=0).max()
+            if not np.isfinite(cond) or cond > 1e13:
+                return False
+        self._room(k)
+        if k:
+            self._P[:k, :k] = Minv
+            self._Kr[:k] = self.K[keys // 4]
+        self._unk[:k] = keys
+        self._sysmodes[:] = modes
+        self._state[0] = k
         return True
 
-    def _set_modes(self, modes: np.ndarray) -> bool:
-        """Make the inverse of the mode system current for ``modes`` by block bordering
-        (nodes that start to slip or separate) and Schur-complement removal (nodes that
-        stick), O(k² r) for r changed unknowns."""
-        key = modes.tobytes()
-        if key == self._modes_key and self._unk is not None:
-            return True
-        self._arrays = None
-        target = self._keys(modes)
-        if self._unk is None:
-            ok = self._rebuild(target)
-        else:
-            mark, unk = self._mark, self._unk
-            mark[target] = True
-            drop = np.flatnonzero(~mark[unk])
-            mark[target] = False
-            mark[unk] = True
-            add = target[~mark[target]]
-            mark[unk] = False
-            nchange = drop.size + add.size
-            if nchange == 0:
-                ok = True
-            elif nchange > max(8, target.size // 2) or self._updates > 400:
-                ok = self._rebuild(target)
+    @property
+    def stats(self) -> dict:
+        """Counts: rate solves, factorizations of a mode system, unknowns added or removed
+        by updates, pivots, Lemke fall-backs."""
+        return {"solves": int(self._loop[7]), "factorizations": self._factorizations,
+                "updates": int(self._loop[5]), "pivots": int(self._loop[6]),
+                "lemke": self._lemke_calls}
+
+    def _iterate(self, x, r, rw, modes, start):
+        """Pivot with :func:`_pivot` (``modes`` in place), factorizing the mode system or
+        growing its buffers when it asks: (ẋ, ṙ), or None where pivoting finds no
+        solution or a mode system is singular."""
+        for _ in range(64):
+            status, xd, rd = _pivot(self.K, self.f, x, r, rw, modes, self._flags, start,
+                                    self.force_tol, self.disp_tol, self._vtol_scale,
+                                    self._sysmodes, self._unk, self._state, self._P,
+                                    self._Kr, self.MAX_UPDATES, self._loop, self._seen)
+            start = 0
+            if status == 0:
+                return xd, rd
+            if status == 1:
+                if not self._rebuild(modes):
+                    return None
+            elif status == 2:
+                self._room(int(self._state[2]))
             else:
-                if drop.size:
-                    self._remove(drop)
-                ok = True
-                if add.size:
-                    ok = self._add(add)
-                    if not ok:
-                        self._unk = None
-                self._updates += nchange
-                self.stats["updates"] += nchange
-        self._modes_key = key if ok else None
-        return ok
+                return None
+        return None
 
     def rates(self, modes: np.ndarray, rw: np.ndarray):
         """Rates (ẋ, ṙ), both (2N,), for the mode set ``modes`` and load rate ``rw``.
 
         Returns None if the mode set's system is singular.
         """
-        self.stats["solves"] += 1
-        if not self._set_modes(modes):
-            return None
-        xd = np.zeros(2 * self.n)
-        if self._unk.size == 0:
-            return xd, rw.copy()
-        if self._arrays is None:
-            self._arrays = self._decode(self._unk)
-        cols, j, cq, cp = self._arrays
-        sol, rd = _mode_rates(self._Minv, self._Kr, cq * rw[j] + cp * rw[self.n + j], rw)
-        xd[cols] = sol
-        return xd, rd
-
-    # -- consistency --------------------------------------------------------------------
-    def violations(self, modes, flags, xd, rd, rate_tol):
-        """Boolean (N,) array: nodes whose active inequalities fail, and the mode to try."""
-        n, f = self.n, self.f
-        gp, gm, p0, sep = flags
-        vd, wd = xd[:n], xd[n:]
-        qd, pd = rd[:n], rd[n:]
-        gpd = f * pd + qd
-        gmd = f * pd - qd
-        vtol = rate_tol / float(np.max(np.diag(self.K)))
-        stick = modes == STICK
-        spos = modes == SLIP_POS
-        sneg = modes == SLIP_NEG
-        smode = modes == SEPARATED
-        p_bad = p0 & (pd < -rate_tol)
-        gp_bad = gp & (gpd < -rate_tol)
-        gm_bad = gm & (gmd < -rate_tol)
-        new = modes.copy()
-        bad = np.zeros(n, bool)
-        # stick
-        b = stick & (p_bad | gp_bad | gm_bad)
-        new[b & gm_bad] = SLIP_NEG
-        new[b & gp_bad] = SLIP_POS
-        new[b & p_bad] = SEPARATED
-        bad |= b
-        # slip positive / negative
-        for m, wrong, other_bad in ((spos, vd < -vtol, gm_bad), (sneg, vd > vtol, gp_bad)):
-            b = m & (p_bad | wrong | other_bad)
-            new[b] = STICK
-            new[b & p_bad] = SEPARATED
-            bad |= b
-        # separated at w = 0
-        b = smode & ~sep & (wd < -vtol)
-        new[b] = STICK
-        bad |= b
-        return bad, new
+        none = np.zeros(2 * self.n)
+        return self._iterate(none, none, np.ascontiguousarray(rw, dtype=float),
+                             np.array(modes, dtype=np.int8), 2)
 
     # -- the rate problem -----------------------------------------------------------------
     def solve(self, x: np.ndarray, r: np.ndarray, rw: np.ndarray, guess: np.ndarray):
@@ -449,48 +558,17 @@ class RateSolver:
         xd, rd : (2N,) arrays
             State rates and reaction rates per radian.
         """
-        flags = self.flags(x, r)
-        gp, gm, p0, sep = flags
-        modes = guess.astype(np.int8, copy=True)
-        modes[(modes == SLIP_POS) & ~gp] = STICK
-        modes[(modes == SLIP_NEG) & ~gm] = STICK
-        modes[(modes == SEPARATED) & ~p0] = STICK
-        modes[sep] = SEPARATED
+        rw = np.ascontiguousarray(rw, dtype=float)
+        modes = np.array(guess, dtype=np.int8)
+        res = self._iterate(x, r, rw, modes, 1)
+        if res is not None:
+            return modes, res[0], res[1]
         rate_tol = 1e-9 * float(np.max(np.abs(rw), initial=0.0)) + 1e-300
-        crit = gp | gm | p0
-        seen = set()
-        block = True
-        best = None
-        for _ in range(4 * self.n + 20):
-            res = self.rates(modes, rw)
-            if res is None:
-                break
-            xd, rd = res
-            if not crit.any():
-                return modes, xd, rd
-            bad, new = self.violations(modes, flags, xd, rd, rate_tol)
-            nbad = int(bad.sum())
-            if nbad == 0:
-                return modes, xd, rd
-            self.stats["pivots"] += 1
-            key = modes.tobytes()
-            if key in seen:
-                break
-            seen.add(key)
-            if best is not None and nbad >= best:
-                block = False
-            best = nbad if best is None else min(best, nbad)
-            if block:
-                modes = new
-            else:
-                j = int(np.flatnonzero(bad)[0])
-                modes = modes.copy()
-                modes[j] = new[j]
-        return self._lemke(x, r, rw, flags, rate_tol)
+        return self._lemke(x, r, rw, tuple(self._flags.copy()), rate_tol)
 
     def _lemke(self, x, r, rw, flags, rate_tol):
         """Fall-back: Lemke's method on the LCP of the critical nodes."""
-        self.stats["lemke"] += 1
+        self._lemke_calls += 1
         n, K, f = self.n, self.K, self.f
         gp, gm, p0, sep = flags
         U = np.flatnonzero(sep)
