@@ -15,7 +15,7 @@ first" (pressed 0.2 µm, pushed 3 µm along +t, pressed to 2 µm) and cycled wit
 samples per cycle: they creep geometrically to a cyclic-slip orbit (hundreds to thousands
 of plain cycles), which the steps of :mod:`slipcycle.discrete.periodic` with its slow-mode
 steps (``simulate(slow_modes=True)``: at this tolerance the follower alone leaves the
-101-node block unconverged after 600 cycles) reach in tens to about a hundred and thirty.
+101-node block unconverged after 600 cycles) reach in tens to about a hundred and fifty.
 They run at tolerance 1e-11: their D is small against the state's elastic energy, so
 D to 1e-6 needs the state to about 1e-11. Reference dissipations of plain cycling
 (``accelerate=False``) were measured once and are stored below.

@@ -110,18 +110,20 @@ def test_fe_block_401_reaches_the_steady_state_of_2200_plain_cycles_to_1e6():
     """401 contact nodes, slide-first: the follower takes no step (its piece changes in
     the first followed cycle), plain cycling needs over a thousand cycles to bring D within
     1e-6 of its limit. The slow-mode steps, each shortened to the first node that stops,
-    end in under 150 cycles at tolerance 1e-11 (measured 128; D is small against the
-    state's elastic energy, so D to 1e-6 needs the state to about 1e-11) on plain
-    cycling's state after 2200 cycles to 1e-6 of the state (measured 7.4e-8: the slip of
-    the 378 stuck nodes, their memory, is kept only that well), with D and every D_j
-    within 1e-6 of D of plain cycling's (measured 6.8e-8), its slipping nodes (the 23 at
-    the trailing edge), and a state that one more exact cycle reproduces."""
+    end in under 200 cycles at tolerance 1e-11 (measured 121; round-off, such as a
+    friction coefficient changed by 1e-14, moves it by tens: the steps' noise is near
+    that tolerance. D is small against the state's elastic energy, so D to 1e-6 needs
+    the state to about 1e-11) on plain cycling's state after 2200 cycles to 1e-6 of the
+    state (measured 6.0e-7: the slip of the 378 stuck nodes, their memory, is kept only
+    that well), with D and every D_j within 1e-6 of D of plain cycling's (measured
+    2.7e-7), its slipping nodes (the 23 at the trailing edge), and a state that one more
+    exact cycle reproduces."""
     system, load, protocol = slid_block(200)
     fast = simulate(system, load, cycles=600, steps_per_cycle=50, protocol=protocol,
                     record=False, tol=1e-11, slow_modes=True)
     assert fast.steady_state == "cyclic_slip"
     assert fast.solver_stats["slow_mode_steps"] >= 1
-    assert fast.cycles_run < 150
+    assert fast.cycles_run < 200
     plain_x = np.load(DATA / "fe_block_401_plain_limit.npy")
     x = fast.cycle_start_states[-1]
     assert np.abs(x - plain_x).max() <= 1e-6 * np.abs(plain_x).max()
@@ -138,7 +140,7 @@ def test_fe_block_401_reaches_the_steady_state_of_2200_plain_cycles_to_1e6():
 def test_slow_mode_steps_keep_plain_cyclings_memory_whenever_they_start(monkeypatch, after):
     """41-node block (plain cycling to 1e-14: D = 3.1769966252792746e-07 J): some nodes
     stop early in the transient. Whenever the steps start, D lands within 1e-6 of plain
-    cycling's (measured 2.5e-8 to 2.8e-8)."""
+    cycling's (measured 1.0e-8 to 1.7e-8)."""
     system, load, protocol = slid_block(20)
     monkeypatch.setattr(steady, "SLOW_AFTER", after)
     run = simulate(system, load, cycles=200, steps_per_cycle=50, protocol=protocol,
@@ -176,21 +178,43 @@ def test_slow_mode_steps_are_off_by_default():
                                                       abs=0)
 
 
-def test_slow_mode_steps_can_land_on_another_periodic_state_of_a_random_system():
-    """Why the steps are off by default, beyond the FE blocks: on the random systems of
-    ``test_discrete_steady_jump.py`` they engage only where the state creeps, and on
-    the 12-node system of seed 59987 (with separation) they end
-    on a periodic state whose D is 1.0e-4 off plain cycling's (both at tolerance 1e-11),
-    where the follower alone ends on plain cycling's: the memory of the stuck nodes is
-    plain cycling's only approximately."""
-    system, load = _random_case(59987, 12, True)
+def test_slow_mode_steps_can_still_land_on_another_periodic_state_of_a_random_system(
+        monkeypatch):
+    """Why the steps stay off by default: a stuck node that reaches its friction limit
+    during a step is not seen. On the random 8-node system of seed 53914 (with
+    separation, the systems of ``test_discrete_steady_jump.py``), steps tried as soon as
+    the follower has none end on a periodic state whose D is 6.6e-3 off plain cycling's
+    (both at tolerance 1e-11), where the follower alone ends on plain cycling's."""
+    system, load = _random_case(53914, 8, True)
     kw = dict(cycles=400, steps_per_cycle=40, tol=1e-11, record=False)
     plain = simulate(system, load, accelerate=False, **kw)
     follower = simulate(system, load, accelerate=True, **kw)
-    slow = simulate(system, load, accelerate=True, slow_modes=True, **kw)
-    assert plain.steady_state == follower.steady_state == slow.steady_state == "cyclic_slip"
     assert_same_steady_state(follower, plain)
+    monkeypatch.setattr(steady, "SLOW_AFTER", 1)
+    slow = simulate(system, load, accelerate=True, slow_modes=True, **kw)
+    assert slow.steady_state == plain.steady_state == "cyclic_slip"
     assert slow.solver_stats["slow_mode_steps"] >= 1
     rel = abs(slow.dissipation_per_cycle - plain.dissipation_per_cycle) / \
+        plain.dissipation_per_cycle
+    assert rel == pytest.approx(6.6e-3, rel=0.05)
+
+
+def test_a_slow_mode_step_that_carries_an_event_past_a_load_sample_lands_elsewhere(
+        monkeypatch):
+    """Why a step also ends where an event would leave its load segment: on the random
+    12-node system of seed 59987 (with separation) the steps then end on plain cycling's
+    steady state (D to 1e-6); allowed past the load samples, they end on a periodic state
+    whose D is 1.0e-4 off (a node that slipped on through a sample stops there instead,
+    with other slip: its memory)."""
+    system, load = _random_case(59987, 12, True)
+    kw = dict(cycles=400, steps_per_cycle=40, tol=1e-11, record=False)
+    plain = simulate(system, load, accelerate=False, **kw)
+    slow = simulate(system, load, accelerate=True, slow_modes=True, **kw)
+    assert slow.solver_stats["slow_mode_steps"] >= 1
+    assert_same_steady_state(slow, plain)
+    monkeypatch.setattr(steady, "SEGMENT_TOL", np.inf)      # no segment limit
+    past = simulate(system, load, accelerate=True, slow_modes=True, **kw)
+    assert past.steady_state == plain.steady_state == "cyclic_slip"
+    rel = abs(past.dissipation_per_cycle - plain.dissipation_per_cycle) / \
         plain.dissipation_per_cycle
     assert rel == pytest.approx(1.04e-4, rel=0.05)
