@@ -180,8 +180,9 @@ def test_slow_mode_steps_are_off_by_default():
 
 def test_slow_mode_steps_can_still_land_on_another_periodic_state_of_a_random_system(
         monkeypatch):
-    """Why the steps stay off by default: a stuck node that reaches its friction limit
-    during a step is not seen. On the random 8-node system of seed 53914 (with
+    """Why the steps stay off by default: they do not check the stuck nodes' friction
+    limits on the way (the follower does), and can land on another member of the set of
+    periodic states. On the random 8-node system of seed 53914 (with
     separation, the systems of ``test_discrete_steady_jump.py``), steps tried as soon as
     the follower has none end on a periodic state whose D is 6.6e-3 off plain cycling's
     (both at tolerance 1e-11), where the follower alone ends on plain cycling's."""
