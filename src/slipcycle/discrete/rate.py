@@ -153,7 +153,7 @@ def _n_keys(mode):
 
 @njit(cache=True)
 def _node_keys(j, mode, n):
-    """The unknowns' keys of node j in ``mode`` (:meth:`RateSolver._keys`)."""
+    """The unknowns' keys of node j in ``mode`` (two; −1 where there is none)."""
     if mode == SLIP_POS:
         return (4 * j + 1, -1)
     if mode == SLIP_NEG:
@@ -175,6 +175,46 @@ def _coefficients(key, f, n):
     if kind == 2:
         return col, j, -1.0, f[j]
     return col, j, 1.0 if col < n else 0.0, 1.0 if col >= n else 0.0
+
+
+@njit(cache=True)
+def _entry(K, f, key, col):
+    """Mode-system entry M[a, b] = c_q K[j_a, col_b] + c_p K[N + j_a, col_b] of the
+    equation of unknown ``key`` (row a) and the column ``col`` of unknown b."""
+    n = f.size
+    _, j, cq, cp = _coefficients(key, f, n)
+    return cq * K[j, col] + cp * K[n + j, col]
+
+
+@njit(cache=True)
+def _mode_keys(modes):
+    """Sorted keys of the unknowns of a mode set (:func:`_node_keys` of every node)."""
+    n = modes.size
+    keys = np.empty(2 * n, np.int64)
+    k = 0
+    for j in range(n):
+        for key in _node_keys(j, modes[j], n):
+            if key >= 0:
+                keys[k] = key
+                k += 1
+    return np.sort(keys[:k])
+
+
+@njit(cache=True)
+def _mode_matrix(K, f, keys):
+    """The mode-system matrix M (k, k) of the unknowns ``keys`` (:func:`_entry`)."""
+    k = keys.size
+    M = np.empty((k, k))
+    for a in range(k):
+        for b in range(k):
+            M[a, b] = _entry(K, f, keys[a], keys[b] // 4)
+    return M
+
+
+@njit(cache=True)
+def _rate_tol(rw):
+    """Rate tolerance [N/rad] deciding which inequality rates fail: 1e-9 of the load rate."""
+    return 1e-9 * np.max(np.abs(rw)) + 1e-300
 
 
 @njit(cache=True)
@@ -230,14 +270,13 @@ def _rates_kernel(K, f, modes, sysmodes, unk, state, P, Kr, rw, max_updates):
             for key in _node_keys(j, modes[j], n):
                 if key < 0:
                     continue
-                col, jn, cqn, cpn = _coefficients(key, f, n)
+                col = key // 4
                 bcol = np.empty(k)
                 crow = np.empty(k)
                 for a in range(k):
-                    ca, ja, cqa, cpa = _coefficients(unk[a], f, n)
-                    bcol[a] = cqa * K[ja, col] + cpa * K[n + ja, col]
-                    crow[a] = cqn * K[jn, ca] + cpn * K[n + jn, ca]
-                d = cqn * K[jn, col] + cpn * K[n + jn, col]
+                    bcol[a] = _entry(K, f, unk[a], col)
+                    crow[a] = _entry(K, f, key, unk[a] // 4)
+                d = _entry(K, f, key, col)
                 sch = _border_one(P, k, bcol, crow, d)
                 if sch == 0.0 or not np.isfinite(sch):
                     state[0] = -1
@@ -364,7 +403,7 @@ def _pivot(K, f, x, r, rw, modes, flags, start, force_tol, disp_tol, vtol_scale,
             flags[0, :], flags[1, :], flags[2, :], flags[3, :] = gp, gm, p0, sep
             modes[:] = m0
             loop[4] = crit
-    rate_tol = 1e-9 * np.max(np.abs(rw)) + 1e-300 if rw.size else 1e-300
+    rate_tol = _rate_tol(rw)
     vtol = rate_tol * vtol_scale
     while loop[0] > 0:
         status, xd, rd, nchange = _rates_kernel(K, f, modes, sysmodes, unk, state, P, Kr,
@@ -453,25 +492,8 @@ class RateSolver:
     # -- rates for a given mode set --------------------------------------------------------
     # Each unknown has an integer key 4*col + kind: col is its index in x = [v, w], kind 1 a
     # positive-slip equation f ṗ_j + q̇_j = 0, kind 2 a negative-slip equation
-    # f ṗ_j − q̇_j = 0, kind 3 a separated node (q̇_j = 0 for col = j, ṗ_j = 0 for col = N+j).
-    def _keys(self, modes: np.ndarray) -> np.ndarray:
-        n = self.n
-        slip_p = np.flatnonzero(modes == SLIP_POS)
-        slip_n = np.flatnonzero(modes == SLIP_NEG)
-        sep = np.flatnonzero(modes == SEPARATED)
-        return np.sort(np.concatenate([4 * slip_p + 1, 4 * slip_n + 2, 4 * sep + 3,
-                                       4 * (n + sep) + 3]))
-
-    def _entries(self, keys: np.ndarray) -> np.ndarray:
-        """Mode-system matrix M[a, b] = c_q K[j_a, col_b] + c_p K[N + j_a, col_b]."""
-        n, f = self.n, self.f
-        cols = keys // 4
-        kind = keys % 4
-        j = cols % n
-        cq = np.where(kind == 1, 1.0, np.where(kind == 2, -1.0, (cols < n).astype(float)))
-        cp = np.where(kind == 3, (cols >= n).astype(float), f[j])
-        return cq[:, None] * self.K[np.ix_(j, cols)] + cp[:, None] * self.K[np.ix_(n + j, cols)]
-
+    # f ṗ_j − q̇_j = 0, kind 3 a separated node (q̇_j = 0 for col = j, ṗ_j = 0 for col = N+j)
+    # (:func:`_node_keys`, :func:`_coefficients`).
     def _room(self, k: int) -> None:
         """Make the buffers hold at least k unknowns (doubling, keeping the content)."""
         kk = max(int(self._state[0]), 0)
@@ -488,10 +510,10 @@ class RateSolver:
     def _rebuild(self, modes: np.ndarray) -> bool:
         """Factorize the mode system of ``modes`` from scratch (O(k³))."""
         self._factorizations += 1
-        keys = self._keys(modes)
+        keys = _mode_keys(modes)
         k = keys.size
         self._state[:] = (-1, 0, 0)
-        M = self._entries(keys)
+        M = _mode_matrix(self.K, self.f, keys)
         if k:
             try:
                 Minv = np.linalg.inv(M)
@@ -563,8 +585,7 @@ class RateSolver:
         res = self._iterate(x, r, rw, modes, 1)
         if res is not None:
             return modes, res[0], res[1]
-        rate_tol = 1e-9 * float(np.max(np.abs(rw), initial=0.0)) + 1e-300
-        return self._lemke(x, r, rw, tuple(self._flags.copy()), rate_tol)
+        return self._lemke(x, r, rw, tuple(self._flags.copy()), _rate_tol(rw))
 
     def _lemke(self, x, r, rw, flags, rate_tol):
         """Fall-back: Lemke's method on the LCP of the critical nodes."""
