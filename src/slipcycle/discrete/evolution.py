@@ -257,14 +257,15 @@ class Evolution:
         closes) and are left out: that the interval of each mode keeps its length is what
         ``episode_log`` checks."""
         changed = modes != self.modes
-        if changed.any():
-            self._close_episodes(np.flatnonzero(changed),
-                                 len(self.jacobian_log) if after_event else -1, theta)
+        nodes = changed.nonzero()[0]        # (cheaper than np.flatnonzero, per event)
+        if nodes.size:
+            self._close_episodes(nodes, len(self.jacobian_log) if after_event else -1,
+                                 theta)
         if self._lowest is None:            # mode intervals only
             return
         if not after_event:
-            if changed.any():
-                self._record_switches(np.flatnonzero(changed), modes)
+            if nodes.size:
+                self._record_switches(nodes, modes)
             _margin_rows(modes, self.f, self.x, self.r, self._lowest, True)
             return
         value, rate = self._at_event
@@ -358,7 +359,7 @@ class Evolution:
                 # the load segment [θ_lo, θ_hi] it must not leave
                 kind, j, gdot, xd_b, t_event = pending
                 diff = xd_b - xd
-                idx = np.flatnonzero(diff)
+                idx = diff.nonzero()[0]
                 jlog.append((kind, j, idx, diff[idx] / gdot, gdot, self._clock + t_event,
                              self._clock, self._clock + dtheta))
                 pending = None

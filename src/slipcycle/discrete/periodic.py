@@ -126,38 +126,28 @@ def cycle_jacobian(log: list, K: np.ndarray, friction: np.ndarray,
     -------
     CycleJacobian or None
     """
-    n = K.shape[0] // 2
     if not log or not any(e[2].size for e in log):
         return CycleJacobian(np.zeros(0, int), np.zeros((0, 0)), np.zeros((0, 0)))
     # every event keeps its factor (the identity when it changes no rate), so that the
     # factors and the events of the log share their indices
-    S = np.unique(np.concatenate([e[2] for e in log]))
+    idx = np.concatenate([e[2] for e in log])
+    seen = np.zeros(K.shape[0], bool)
+    seen[idx] = True
+    S = seen.nonzero()[0]
     E, m = len(log), S.size
     if E * m > max_entries:
         return None
     kinds = np.array([e[0] for e in log])
     nodes = np.array([e[1] for e in log])
-    U = np.zeros((E, m))
-    sizes = [e[2].size for e in log]
-    U[np.repeat(np.arange(E), sizes),
-      np.searchsorted(S, np.concatenate([e[2] for e in log]))] = np.concatenate(
-          [e[3] for e in log])
+    U = _factor_rows(np.array([e[2].size for e in log]), idx,
+                     np.concatenate([e[3] for e in log]), S, K.shape[0])
     timing = {}
     if all(len(e) >= 8 for e in log):
-        timing = {name: np.array([e[i] for e in log], float)
-                  for i, name in ((4, "rate"), (5, "time"), (6, "lo"), (7, "hi"))}
+        t = np.array([e[4:8] for e in log], float)
+        timing = {"rate": t[:, 0].copy(), "time": t[:, 1].copy(), "lo": t[:, 2].copy(),
+                  "hi": t[:, 3].copy()}
     # gradients of g = f p + q, f p − q, p (rows of K) and w (a unit vector)
-    f = np.asarray(friction, float)[nodes]
-    Kq = K[np.ix_(nodes, S)]
-    Kp = K[np.ix_(n + nodes, S)]
-    sq = np.where(kinds == 0, 1.0, np.where(kinds == 1, -1.0, 0.0))
-    sp = np.where(kinds <= 1, f, np.where(kinds == 2, 1.0, 0.0))
-    A = sq[:, None] * Kq + sp[:, None] * Kp
-    gap = np.flatnonzero(kinds == 3)
-    if gap.size:
-        pos = np.searchsorted(S, n + nodes[gap])
-        hit = (pos < m) & (S[np.minimum(pos, m - 1)] == n + nodes[gap])
-        A[gap[hit], pos[hit]] = 1.0
+    A = _gradients(kinds, nodes, S, K, friction)
     return CycleJacobian(S, np.ascontiguousarray(U), np.ascontiguousarray(A), **timing)
 
 
@@ -377,18 +367,44 @@ def piece_constraints(jac: CycleJacobian, log: list, margin_log: list, event_mar
 
 def _gradients(kind: np.ndarray, node: np.ndarray, S: np.ndarray, K: np.ndarray,
                friction: np.ndarray) -> np.ndarray:
-    """Gradients on S of f p + q (kind 0), f p − q (1), p (2) and w (3) of ``node``."""
+    """(len(kind), m) gradients on S (sorted) of f p + q (kind 0), f p − q (1), p (2) and
+    w (3) of ``node``: of the events of a cycle and of the inequalities of its modes."""
+    return _gradient_rows(np.asarray(kind, np.int64), np.asarray(node, np.int64),
+                          np.asarray(S, np.int64), K, np.asarray(friction, float))
+
+
+@njit(cache=True)
+def _gradient_rows(kind, node, S, K, friction):
+    """The loop of :func:`_gradients`: rows of K gathered at S, or a unit vector."""
     n, m = K.shape[0] // 2, S.size
-    f = np.asarray(friction, float)[node]
-    Kq, Kp = K[np.ix_(node, S)], K[np.ix_(n + node, S)]
-    sq = np.select([kind == 0, kind == 1], [1.0, -1.0], 0.0)
-    sp = np.select([kind <= 1, kind == 2], [f, 1.0], 0.0)
-    G = sq[:, None] * Kq + sp[:, None] * Kp
-    gap = np.flatnonzero(kind == 3)
-    pos = np.searchsorted(S, n + node[gap])
-    hit = (pos < m) & (S[np.minimum(pos, m - 1)] == n + node[gap])
-    G[gap[hit], pos[hit]] = 1.0
-    return np.ascontiguousarray(G)
+    G = np.zeros((kind.size, m))
+    for r in range(kind.size):
+        k, j = kind[r], node[r]
+        if k == 3:                       # w of node j: a unit vector where S holds it
+            i = np.searchsorted(S, n + j)
+            if i < m and S[i] == n + j:
+                G[r, i] = 1.0
+            continue
+        sq = 1.0 if k == 0 else (-1.0 if k == 1 else 0.0)
+        sp = friction[j] if k <= 1 else 1.0
+        for i in range(m):
+            G[r, i] = sq * K[j, S[i]] + sp * K[n + j, S[i]]
+    return G
+
+
+@njit(cache=True)
+def _factor_rows(sizes, idx, vals, S, size):
+    """(E, m) rows u_e on S of the factors: ``sizes[e]`` entries ``vals`` at ``idx`` each."""
+    pos = np.full(size, -1)
+    for i in range(S.size):
+        pos[S[i]] = i
+    U = np.zeros((sizes.size, S.size))
+    k = 0
+    for e in range(sizes.size):
+        for _ in range(sizes[e]):
+            U[e, pos[idx[k]]] = vals[k]
+            k += 1
+    return U
 
 
 @njit(cache=True, fastmath={"reassoc", "contract"})
