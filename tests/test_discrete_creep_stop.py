@@ -1,0 +1,87 @@
+"""The steady-state test of a creeping system: where plain cycling's increments shrink
+geometrically, by ρ per cycle, the state is still ρ/(1 − ρ) increments from its periodic
+limit (Aitken's estimate), and :func:`~slipcycle.discrete.steady.simulate` is steady only
+when that distance is below the tolerance too. FE-reduced blocks creep at ρ close to 1,
+where the last increment alone says little about the distance to the limit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import slid_block
+
+from slipcycle.discrete import simulate, steady
+from slipcycle.discrete.steady import _creep_distance
+
+#: D of plain cycling of the 41-node slid block to 1e-14 [J]
+#: (``tests/test_discrete_slow_modes.py``)
+D_41 = 3.1769966252792746e-07
+
+
+def _starts(increments):
+    """Start-of-cycle states of a 1-coordinate creep with the given increments."""
+    return [np.array([v]) for v in np.concatenate([[1.0], 1.0 + np.cumsum(increments)])]
+
+
+def test_creep_distance_is_the_rest_of_the_geometric_series():
+    """Increments 1e-3·0.9^k: the rest after the last is 0.9/(1 − 0.9) = 9 times it."""
+    inc = 1e-3 * 0.9 ** np.arange(5)
+    starts = _starts(inc)
+    got = _creep_distance(starts, set(), inc[-1], 1.0)
+    assert got == pytest.approx(9 * inc[-1], rel=1e-9)
+    exact_rest = 1e-3 * 0.9 ** 5 / (1 - 0.9)
+    assert got == pytest.approx(exact_rest, rel=1e-9)
+
+
+@pytest.mark.parametrize("case", ["fast", "growing", "after a step", "round-off",
+                                  "two starts"])
+def test_creep_distance_is_the_last_increment_where_no_creep_shows(case):
+    """A fast contraction (ρ ≤ 1/2, the rest is at most the last increment), increments
+    that grow, an increment after a periodic step, increments at round-off, or too few
+    cycles: the last increment itself."""
+    inc = {"fast": 1e-3 * 0.3 ** np.arange(4), "growing": 1e-3 * 1.1 ** np.arange(4),
+           "after a step": 1e-3 * 0.9 ** np.arange(4),
+           "round-off": 1e-15 * 0.9 ** np.arange(4), "two starts": [1e-3]}[case]
+    starts = _starts(inc)
+    targets = {len(starts) - 2} if case == "after a step" else set()
+    assert _creep_distance(starts, targets, inc[-1], 1.0) == inc[-1]
+
+
+def test_plain_cycling_of_a_creeping_block_stops_near_its_limit():
+    """41-node slid block, plain cycling at the default tolerance 1e-8: it creeps at
+    ρ = 0.95 per cycle. Steady after 273 cycles with D 7.6e-6 off the limit of plain
+    cycling to 1e-14; the last increment alone (the test before) stopped it after 214
+    cycles with D 1.4e-4 off, 18 times its own tolerance on the state."""
+    system, load, protocol = slid_block(20)
+    kw = dict(cycles=600, steps_per_cycle=50, protocol=protocol, record=False,
+              accelerate=False)
+    run = simulate(system, load, **kw)
+    x = run.cycle_start_states
+    rho = np.abs(x[-1] - x[-2]).max() / np.abs(x[-2] - x[-3]).max()
+    assert rho == pytest.approx(0.95, abs=0.01)
+    assert run.steady_state == "cyclic_slip" and run.cycles_run == 273
+    assert abs(run.dissipation_per_cycle - D_41) / D_41 == pytest.approx(7.6e-6, rel=0.05)
+    assert abs(run.dissipation_per_cycle - D_41) / D_41 < 1e-5
+
+
+def test_the_last_increment_alone_stops_a_creeping_block_far_from_its_limit(monkeypatch):
+    """The same run with the increment test alone: 214 cycles, D 1.4e-4 off."""
+    monkeypatch.setattr(steady, "_creep_distance", lambda starts, targets, residual,
+                        xscale: residual)
+    system, load, protocol = slid_block(20)
+    run = simulate(system, load, cycles=600, steps_per_cycle=50, protocol=protocol,
+                   record=False, accelerate=False)
+    assert run.steady_state == "cyclic_slip" and run.cycles_run == 214
+    assert abs(run.dissipation_per_cycle - D_41) / D_41 == pytest.approx(1.4e-4, rel=0.05)
+
+
+def test_cycles_that_run_out_after_the_increment_test_still_give_the_class():
+    """With 240 cycles allowed (the increment is below 1e-8 from cycle 214 on, the
+    creep's distance only from 273): classified cyclic slip after the 240 cycles, as the
+    increment test alone would say, not 'not converged'; closer to the limit than at 214."""
+    system, load, protocol = slid_block(20)
+    run = simulate(system, load, cycles=240, steps_per_cycle=50, protocol=protocol,
+                   record=False, accelerate=False)
+    assert run.steady_state == "cyclic_slip" and run.cycles_run == 240
+    assert run.residual <= 1e-8
+    assert abs(run.dissipation_per_cycle - D_41) / D_41 < 1.4e-4
