@@ -11,7 +11,7 @@ import pytest
 from conftest import slid_block
 
 from slipcycle.discrete import simulate, steady
-from slipcycle.discrete.steady import _creep_distance
+from slipcycle.kernels.creep import creep_distance
 
 #: D of plain cycling of the 41-node slid block to 1e-14 [J]
 #: (``tests/test_discrete_slow_modes.py``)
@@ -27,24 +27,19 @@ def test_creep_distance_is_the_rest_of_the_geometric_series():
     """Increments 1e-3·0.9^k: the rest after the last is 0.9/(1 − 0.9) = 9 times it."""
     inc = 1e-3 * 0.9 ** np.arange(5)
     starts = _starts(inc)
-    got = _creep_distance(starts, set(), inc[-1], 1.0)
+    got = creep_distance(starts, inc[-1], 1.0)
     assert got == pytest.approx(9 * inc[-1], rel=1e-9)
     exact_rest = 1e-3 * 0.9 ** 5 / (1 - 0.9)
     assert got == pytest.approx(exact_rest, rel=1e-9)
 
 
-@pytest.mark.parametrize("case", ["fast", "growing", "after a step", "round-off",
-                                  "two starts"])
+@pytest.mark.parametrize("case", ["fast", "growing", "round-off", "two starts"])
 def test_creep_distance_is_the_last_increment_where_no_creep_shows(case):
     """A fast contraction (ρ ≤ 1/2, the rest is at most the last increment), increments
-    that grow, an increment after a periodic step, increments at round-off, or too few
-    cycles: the last increment itself."""
+    that grow, increments at round-off, or too few cycles: the last increment itself."""
     inc = {"fast": 1e-3 * 0.3 ** np.arange(4), "growing": 1e-3 * 1.1 ** np.arange(4),
-           "after a step": 1e-3 * 0.9 ** np.arange(4),
            "round-off": 1e-15 * 0.9 ** np.arange(4), "two starts": [1e-3]}[case]
-    starts = _starts(inc)
-    targets = {len(starts) - 2} if case == "after a step" else set()
-    assert _creep_distance(starts, targets, inc[-1], 1.0) == inc[-1]
+    assert creep_distance(_starts(inc), inc[-1], 1.0) == inc[-1]
 
 
 def test_plain_cycling_of_a_creeping_block_stops_near_its_limit():
@@ -66,8 +61,7 @@ def test_plain_cycling_of_a_creeping_block_stops_near_its_limit():
 
 def test_the_last_increment_alone_stops_a_creeping_block_far_from_its_limit(monkeypatch):
     """The same run with the increment test alone: 214 cycles, D 1.4e-4 off."""
-    monkeypatch.setattr(steady, "_creep_distance", lambda starts, targets, residual,
-                        xscale: residual)
+    monkeypatch.setattr(steady, "creep_distance", lambda starts, residual, xscale: residual)
     system, load, protocol = slid_block(20)
     run = simulate(system, load, cycles=600, steps_per_cycle=50, protocol=protocol,
                    record=False, accelerate=False)

@@ -48,6 +48,7 @@ from slipcycle.discrete.periodic import (
     slow_mode_sum,
 )
 from slipcycle.errors import InadmissibleInitialState
+from slipcycle.kernels.creep import creep_distance
 from slipcycle.loading.nodal import force_scale
 
 __all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
@@ -122,23 +123,6 @@ def _same_piece(moving: frozenset, moving_step: frozenset, totals, force_tol: fl
         return False
     gone = np.array(sorted(moving_step - moving), dtype=int)
     return bool(np.all(totals.min_margin[gone] <= force_tol)) if gone.size else True
-
-
-def _creep_distance(starts: list, targets: set, residual: float, xscale: float) -> float:
-    """How far the state still is from its periodic limit, relative to ``xscale``: the
-    last increment where the increments do not shrink geometrically, else the rest of
-    the geometric series, ρ/(1 − ρ) times it, with ρ = |x_c − x_{c−1}| / |x_{c−1} − x_{c−2}|
-    (Aitken's estimate; a creep that keeps 0.99 of its increment per cycle is still 99
-    increments from its limit). Increments within a thousand round-offs of the state, or
-    after a step, give no ratio."""
-    if len(starts) < 3 or len(starts) - 2 in targets:
-        return residual
-    last = residual * xscale
-    before = float(np.max(np.abs(starts[-2] - starts[-3])))
-    if last <= 1e3 * np.finfo(float).eps * xscale or not 0.0 < last < before:
-        return residual
-    rho = last / before
-    return max(residual, residual * rho / (1.0 - rho))
 
 
 def _cycle_piece(evo: Evolution, system: FrictionalSystem, increment: np.ndarray,
@@ -436,8 +420,9 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         Relative tolerance of the steady-state test: the last increment of the
         start-of-cycle state, and, where the increments shrink geometrically by ρ per
         cycle, the rest of the creep, ρ/(1 − ρ) times the last increment
-        (:func:`_creep_distance`), must both be below it. If the cycles run out with
-        only the increment below it, the run is classified as steady all the same.
+        (:func:`~slipcycle.kernels.creep.creep_distance`), must both be below it. If
+        the cycles run out with only the increment below it, the run is classified as
+        steady all the same.
     min_cycles : int
         Run at least this many cycles.
     record : bool
@@ -508,8 +493,9 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         d1 = starts[-1] - starts[-2]
         residual = float(np.max(np.abs(d1))) / xscale
         checking, saved = saved, None
-        near = residual if checking is not None else _creep_distance(starts, targets,
-                                                                     residual, xscale)
+        # the rest of a geometric creep must be below the tolerance too (not after a step)
+        near = residual if checking is not None or len(starts) - 2 in targets else \
+            creep_distance(starts, residual, xscale)
         # nodes that slipped (beyond round-off) or opened in this cycle
         moving = frozenset(np.flatnonzero((totals.slip_length > 1e-3 * tol * xscale)
                                           | totals.separated).tolist()) if accel else None

@@ -1,1 +1,2 @@
-"""Compiled kernels shared by several models (Numba, ``cache=True``)."""
+"""Numerical kernels shared by several models (compiled with Numba, ``cache=True``, where
+they loop)."""
