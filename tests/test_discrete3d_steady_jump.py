@@ -8,6 +8,7 @@ coupled systems and on an FE-like chain whose plain cycling creeps slowly."""
 import numpy as np
 import pytest
 
+from slipcycle.discrete3d import steady as steady3d
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
 from slipcycle.discrete3d.steady import _anderson, simulate3d
@@ -175,3 +176,30 @@ def test_mixing_on_a_200_node_chain_keeps_the_member_plain_cycling_reaches():
     assert acc.dissipation_per_cycle == pytest.approx(ref.dissipation_per_cycle, rel=1e-7)
     x_ref = ref.cycle_start_states[-1]
     assert np.max(np.abs(acc.cycle_start_states[-1] - x_ref)) <= 1e-5 * np.max(np.abs(x_ref))
+
+
+def test_plain_cycling_of_the_chain_stops_within_the_rest_of_its_creep(monkeypatch):
+    """50-node chain, plain cycling at tolerance 1e-7 against plain cycling to 1e-11: the
+    increments shrink by 0.63 per cycle, so the rest of the creep is 1.7 times the last
+    increment. With that distance in the steady-state test the run stops after 28 cycles
+    with its start state 2.6e-7 of the largest slip from the limit and D 2.8e-9 off; with
+    the last increment alone after 26 cycles, 6.4e-7 and 7.0e-9 off."""
+    system, load = _fe_like(50)
+    kw = dict(steps_per_cycle=40, step_tol=1e-6, record=False, accelerate=False,
+              cycles=600)
+    ref = simulate3d(system, load, tol=1e-11, **kw)
+    x_ref = ref.cycle_start_states[-1]
+
+    def errors(run):
+        return (np.abs(run.cycle_start_states[-1] - x_ref).max() / np.abs(x_ref).max(),
+                abs(run.dissipation_per_cycle / ref.dissipation_per_cycle - 1))
+
+    run = simulate3d(system, load, tol=1e-7, **kw)
+    monkeypatch.setattr(steady3d, "creep_distance", lambda starts, residual, xscale: residual)
+    alone = simulate3d(system, load, tol=1e-7, **kw)
+    assert (run.cycles_run, alone.cycles_run) == (28, 26)
+    x_err, d_err = errors(run)
+    x_alone, d_alone = errors(alone)
+    assert x_err == pytest.approx(2.6e-7, rel=0.05) and d_err == pytest.approx(2.8e-9, rel=0.05)
+    assert x_alone == pytest.approx(6.4e-7, rel=0.05)
+    assert d_alone == pytest.approx(7.0e-9, rel=0.05)
