@@ -585,9 +585,9 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
             if (target is None and jac is not None and slow_left > 0
                     and no_step >= SLOW_AFTER):
                 # the piece changes every cycle: step along the slow modes of this one
-                # where the state creeps (the last increment kept half of the one before;
-                # a step from the first cycles, before that shows, extrapolates a
-                # transient and lands on another periodic state)
+                # where the state creeps slowly (the last increment kept SLOW_CREEP of the
+                # one before; a step from the first cycles, before that shows,
+                # extrapolates a transient and lands on another periodic state)
                 creep = len(starts) >= 3 and (
                     len(starts) - 2 in targets
                     or np.max(np.abs(d1)) >= SLOW_CREEP * np.max(np.abs(starts[-2]

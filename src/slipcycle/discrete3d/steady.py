@@ -427,11 +427,12 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
             res_prev = residual
             continue
         # the last increment, and the rest of a geometric creep of this map's plain
-        # cycles (not the check of a replayed fixed point), below the tolerance
+        # cycles (not the check of a replayed fixed point; never below the increment),
+        # below the tolerance
         increment_steady = residual <= tol and (not was_replay or was_verify)
         near = residual if was_verify else creep_distance(starts[plain_from:], residual,
                                                           xscale)
-        if residual <= tol and near <= tol:
+        if near <= tol:
             if not was_replay or was_verify:
                 state = "steady"
                 break
