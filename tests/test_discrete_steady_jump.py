@@ -18,7 +18,7 @@ from conftest import assert_same_steady_state, slid_block
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
-from slipcycle.discrete import DiscreteLoad, FrictionalSystem, critical_friction, simulate
+from slipcycle.discrete import DiscreteLoad, FrictionalSystem, critical_friction, simulate, steady
 from slipcycle.discrete.evolution import Evolution
 from slipcycle.discrete.periodic import cycle_jacobian
 from slipcycle.discrete.rate import RateProblemError
@@ -162,3 +162,23 @@ def test_cycle_jacobian_matches_finite_differences_of_the_cycle_map():
         np.testing.assert_allclose(fd, e - jac.apply(e), rtol=0, atol=1e-5)
         checked += 1
     assert checked >= 1
+
+
+def test_follower_backs_off_where_it_finds_no_step_and_cycles_plainly(monkeypatch):
+    """On the 41-node block the follower finds its first step only after 74 cycles (the
+    piece of the cycle map changes every cycle before). After four fruitless attempts in a
+    row it waits 1, 2, 4, then 8 cycles between attempts: 13 attempts in the first 60
+    cycles (cycles 0–4, 6, 10, 18, 26, …, 58) instead of 59, and a run without steps is
+    plain cycling to the last bit."""
+    system, load, protocol = slid_block(20)
+    kw = dict(cycles=60, steps_per_cycle=50, protocol=protocol, record=False, tol=1e-10)
+    plain = simulate(system, load, accelerate=False, **kw)
+    fast = simulate(system, load, accelerate=True, **kw)
+    assert fast.solver_stats["periodic_steps"] == 0
+    assert fast.solver_stats["periodic_attempts"] == 13
+    np.testing.assert_array_equal(fast.cycle_start_states, plain.cycle_start_states)
+    np.testing.assert_array_equal(fast.dissipation_per_node, plain.dissipation_per_node)
+    monkeypatch.setattr(steady, "MAX_ATTEMPT_WAIT", 1)       # an attempt after every cycle
+    eager = simulate(system, load, accelerate=True, **kw)
+    assert eager.solver_stats["periodic_attempts"] == 59
+    np.testing.assert_array_equal(eager.cycle_start_states, plain.cycle_start_states)

@@ -88,6 +88,17 @@ MAX_FOLLOW = 1000
 #: mode intervals of a cycle recorded without its inequalities
 RECORD = "record the inequalities"
 
+#: fruitless attempts of the follower in a row after which it backs off: after k ≥ this
+#: many, the next attempt waits min(2^(k − this), :data:`MAX_ATTEMPT_WAIT`) cycles. An
+#: attempt records the cycle's events and gathers its Jacobian, which costs about as much
+#: as the cycle itself; where the piece of the cycle map changes every cycle (large
+#: FE-reduced blocks, slip fronts of many nodes) it never finds a step
+ATTEMPTS_BEFORE_WAIT = 4
+
+#: most cycles between two attempts of a follower that keeps finding no step: a step
+#: found that much later costs at most as many plain cycles
+MAX_ATTEMPT_WAIT = 8
+
 #: slow-mode steps (:func:`_slow_mode_target`) refused by their checking cycle before a run
 #: stops trying them
 MAX_SLOW_REJECTIONS = 10
@@ -173,9 +184,10 @@ def _periodic_target(evo: Evolution, system: FrictionalSystem, jac: CycleJacobia
     intervals = ModeIntervals.from_log(evo.episode_log, INTERVAL_TOL)
     tiny = 1e-3 * drift_tol
     # the events and mode intervals alone first (O(E) per cycle followed): most refusals
-    # happen there, before the inequalities are gathered (O(E N))
+    # happen there, before the inequalities are gathered (O(E N)); they only decide
+    # whether a skip of MIN_SKIP cycles is possible, so they follow no further
     run = follow_piece(jac, increment, PieceConstraints.none(*jac.U.shape), intervals, tiny,
-                       max_cycles=MAX_FOLLOW)
+                       max_cycles=MIN_SKIP)
     if not run.reached and run.cycles < MIN_SKIP:
         return None
     if evo.margin_log is None:
@@ -431,6 +443,8 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         Step to the periodic state once two consecutive cycles share one sequence of modes
         and events (:mod:`~slipcycle.discrete.periodic`), then check it by an exact cycle;
         ``False``: plain cycling. Default (None): on for N ≥ :data:`ACCELERATE_MIN_NODES`.
+        Where the attempts keep finding no step they back off
+        (:data:`ATTEMPTS_BEFORE_WAIT`, :data:`MAX_ATTEMPT_WAIT`).
     slow_modes : bool
         With the steps on: where no step has been found for :data:`SLOW_AFTER` cycles
         (the piece of the cycle map changes every cycle), also step along the slow modes
@@ -463,13 +477,15 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     increment_steady = False
     ratchet = np.zeros(n)
     accel = (n >= ACCELERATE_MIN_NODES) if accelerate is None else bool(accelerate)
-    jstats = {"periodic_steps": 0, "periodic_steps_rejected": 0, "cycles_discarded": 0,
+    jstats = {"periodic_attempts": 0, "periodic_steps": 0, "periodic_steps_rejected": 0,
+              "cycles_discarded": 0,
               "slow_mode_steps": 0, "slow_mode_steps_rejected": 0}
     targets = set()        # indices into ``starts`` that are targets of a periodic step
     saved = None           # what to restore if the cycle checking a periodic step fails
     rejects_left, wait = MAX_PERIODIC_REJECTIONS, 0
     slow_left = MAX_SLOW_REJECTIONS if slow_modes else 0
     no_step = 0            # cycles in a row in which the follower found no step
+    fruitless = 0          # attempts in a row that found no step (the back-off)
     moving_prev = None     # nodes the events of the last kept cycle moved
     inequalities = False   # record the inequalities too (the last attempt asked for them)
     for c in range(cycles):
@@ -524,7 +540,7 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         # a steady state that plain cycling would accept is polished by one more step
         # (when the last two cycles allow one) to POLISH·tol, closer to the true limit
         same = moving_prev is not None and moving == moving_prev   # the same nodes slipped
-        polish = (accel and rejects_left > 0 and c + 1 < cycles and same
+        polish = (attempt and rejects_left > 0 and c + 1 < cycles and same
                   and checking is None and residual > POLISH * tol)
         # where slow-mode steps are on, a residual below the tolerance is not yet steady:
         # the creep's remaining distance is about residual / (1 − λ), and the next slow-mode
@@ -569,6 +585,7 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
                 state = "ratcheting"
                 break
         if attempt and c + 1 < cycles:
+            jstats["periodic_attempts"] += 1
             # the follower where the same nodes moved in the last two cycles (the cycle
             # map on one piece), then the slow modes where it found no step for a while
             follow = same and rejects_left > 0
@@ -581,6 +598,16 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
             inequalities = step is RECORD
             target, predicted = (None, None) if step is None or step is RECORD else step
             no_step = no_step + 1 if target is None else 0
+            # back off where the follower keeps finding nothing (not while slow-mode
+            # steps, which need every cycle's Jacobian, are on; a cycle that asks for
+            # the inequalities is part of the same attempt)
+            if step is not None and step is not RECORD:
+                fruitless = 0
+            elif step is None:
+                fruitless += 1
+                if slow_left == 0 and fruitless >= ATTEMPTS_BEFORE_WAIT:
+                    wait = max(wait, min(2 ** (fruitless - ATTEMPTS_BEFORE_WAIT),
+                                         MAX_ATTEMPT_WAIT))
             settled = True     # no slow mode says the state is still far from periodic
             if (target is None and jac is not None and slow_left > 0
                     and no_step >= SLOW_AFTER):
