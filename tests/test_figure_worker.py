@@ -152,3 +152,61 @@ def test_interrupt_during_the_netcdf_write_is_raised_once_the_file_is_complete()
             time.sleep(0.05)
             done.append(True)
     assert done == [True]
+
+
+#: one small case of every model that ``slipcycle run`` solves: example, text replacements
+#: and dotted overrides that keep it quick (the figures, not the numbers, are under test)
+MODEL_CASES = {
+    "halfspace": ("halfspace_sphere", {"steps_per_cycle = 400": "steps_per_cycle = 60"}, {}),
+    "discrete": ("discrete_two_node", {"steps_per_cycle = 400": "steps_per_cycle = 60"}, {}),
+    "discrete3d": ("discrete3d_three_node", {"steps_per_cycle = 100": "steps_per_cycle = 40"},
+                   {}),
+    "rods": ("rods_microslip", {}, {}),
+    "fe": ("fe_block_nu03", {"steps_per_cycle = 400": "steps_per_cycle = 40"}, {}),
+    "lap_joint": ("bolted_lap_joint", {}, "demo"),
+}
+
+
+def _model_outputs(model: str):
+    import tomllib
+
+    import slipcycle
+    from slipcycle.api import apply_overrides, toml_text
+    from slipcycle.demo import LAP_JOINT_DEMO
+
+    example, replace, overrides = MODEL_CASES[model]
+    text = example_text(example)
+    for old, new in replace.items():
+        assert old in text, (example, old)
+        text = text.replace(old, new)
+    if overrides == "demo":
+        text = toml_text(apply_overrides(tomllib.loads(text), LAP_JOINT_DEMO))
+    outputs = slipcycle.run(text).to_outputs()
+    assert tomllib.loads(text)["model"] == model
+    return outputs
+
+
+def test_every_model_that_run_solves_is_covered_here():
+    from slipcycle.registry import RUN_MODELS
+
+    assert sorted(MODEL_CASES) == sorted(RUN_MODELS)
+
+
+@pytest.mark.parametrize("model", sorted(MODEL_CASES))
+def test_worker_draws_every_models_figures_and_they_match_the_serial_ones(tmp_path, model,
+                                                                           worker):
+    import pickle
+
+    outputs = _model_outputs(model)
+    assert outputs.figures, model
+    # the figures travel to the worker: each is a partial of a module-level function
+    pickle.dumps(outputs.figures)
+    write_outputs(tmp_path / "here", outputs)
+    write_outputs(tmp_path / "workers", outputs, draw=worker.draw)
+    assert worker._sent, f"{model}: figures drawn in the process, not by the worker"
+    here = _pixels(tmp_path / "here" / "figures")
+    there = _pixels(tmp_path / "workers" / "figures")
+    assert sorted(here) == sorted(f"{n}.png" for n in outputs.figures)
+    assert sorted(there) == sorted(here)
+    for name in here:
+        np.testing.assert_array_equal(there[name], here[name], err_msg=f"{model}: {name}")

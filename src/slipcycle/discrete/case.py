@@ -10,6 +10,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import partial
 from typing import ClassVar
 
 import numpy as np
@@ -439,12 +440,13 @@ class DiscreteResult(RunResult):
 
         ds = self.to_dataset() if dataset is None else dataset
         dc, res = self.case, self.solution
+        # partials of module-level functions: picklable, so drawn by the CLI's workers
         figures = {
-            "slip_and_tractions": lambda: plots.slip_and_tractions(ds),
-            "hysteresis": lambda: plots.hysteresis(ds),
+            "slip_and_tractions": partial(plots.slip_and_tractions, ds),
+            "hysteresis": partial(plots.hysteresis, ds),
         }
         if dc.system.n_nodes == 2:
-            figures["v_space"] = lambda: plots.v_space(res, *_v_space_geometry(dc))
+            figures["v_space"] = partial(plots.v_space, res, *_v_space_geometry(dc))
         return figures
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import ClassVar
 
@@ -386,11 +387,12 @@ class DiscreteResult3D(RunResult):
         ds = self.to_dataset() if dataset is None else dataset
         if ds.sizes["cycle"] == 0:
             return {}
+        # partials of module-level functions: picklable, so drawn by the CLI's workers
         return {
-            "interface_states": lambda: plots.state_map(ds),
-            "dissipation_map": lambda: plots.dissipation_map(ds),
-            "slip_directions": lambda: plots.slip_directions(ds),
-            "dissipation_history": lambda: plots.dissipation_history(ds),
+            "interface_states": partial(plots.state_map, ds),
+            "dissipation_map": partial(plots.dissipation_map, ds),
+            "slip_directions": partial(plots.slip_directions, ds),
+            "dissipation_history": partial(plots.dissipation_history, ds),
         }
 
     def write_fields(self, directory: str | Path, formats=None) -> list[Path]:

@@ -27,6 +27,7 @@ import copy
 import logging
 import time
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, ClassVar
 
 import numpy as np
@@ -469,9 +470,10 @@ class FEResult(RunResult):
 
         ds = self.to_dataset() if dataset is None else dataset
         figs = dict(self.finest.figures(ds))
-        figs["mesh_convergence"] = lambda: mesh_convergence_figure(
-            [m.spacing for m in self.meshes], [m.dissipation for m in self.meshes],
-            self.mesh_convergence, title=f"{self.fe_case.geometry}: dissipation per cycle")
+        figs["mesh_convergence"] = partial(
+            mesh_convergence_figure, [m.spacing for m in self.meshes],
+            [m.dissipation for m in self.meshes], self.mesh_convergence,
+            title=f"{self.fe_case.geometry}: dissipation per cycle")
         return figs
 
 

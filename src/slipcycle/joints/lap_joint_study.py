@@ -31,6 +31,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -747,12 +748,13 @@ class LapJointResult(RunResult):
         from slipcycle.plot import joints as plots  # matplotlib only for figures
 
         ds = self.to_dataset() if dataset is None else dataset
+        # partials of module-level functions: picklable, so drawn by the CLI's workers
         return {
-            "dissipation_by_protocol": lambda: plots.dissipation_by_protocol(ds),
-            "slip_maps": lambda: plots.slip_maps(ds),
-            "dissipation_maps": lambda: plots.dissipation_maps(ds),
-            "dissipation_by_bolt": lambda: plots.dissipation_by_bolt(ds),
-            "dissipation_history": lambda: plots.dissipation_history(ds),
+            "dissipation_by_protocol": partial(plots.dissipation_by_protocol, ds),
+            "slip_maps": partial(plots.slip_maps, ds),
+            "dissipation_maps": partial(plots.dissipation_maps, ds),
+            "dissipation_by_bolt": partial(plots.dissipation_by_bolt, ds),
+            "dissipation_history": partial(plots.dissipation_history, ds),
         }
 
     def write_fields(self, directory: str | Path) -> list[Path]:

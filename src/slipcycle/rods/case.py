@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import partial
 from typing import ClassVar
 
 import numpy as np
@@ -512,8 +513,9 @@ class RodsResult(RunResult):
 
         ds = self.to_dataset() if dataset is None else dataset
         reg = self.analysis["reg"]
-        figures = {"hysteresis": lambda: plots.hysteresis(ds),
-                   "time_history": lambda: plots.time_history(ds)}
+        # partials of module-level functions: picklable, so drawn by the CLI's workers
+        figures = {"hysteresis": partial(plots.hysteresis, ds),
+                   "time_history": partial(plots.time_history, ds)}
         if reg is not None:
             figures.update(reg.figures())
         return figures

@@ -21,6 +21,7 @@ import math
 import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, ClassVar
 
 import numpy as np
@@ -165,7 +166,7 @@ class RegularisationResult(StudyResult, Mapping):
         """``regularisation``: dissipation versus T*/T_g and Θ_a/Θ_g, log–log."""
         from slipcycle.plot import rods as plots
 
-        return {"regularisation": lambda: plots.regularisation(self)}
+        return {"regularisation": partial(plots.regularisation, self)}
 
 
 def _slope(x, y):
