@@ -107,34 +107,76 @@ def load_path(ds: xr.Dataset, friction: float) -> Figure:
 
 
 def tractions(ds: xr.Dataset) -> Figure:
-    """Pressure and shear traction over the radius at the snapshot instants."""
-    fig = _figure(6.5, 4.4)
+    """Pressure and shear traction over the radius at the snapshot instants.
+
+    Every curve is in the legend: the shear tractions q(r) (solid) and the pressures p(r)
+    (dashed; one curve where the pressure is the same at every snapshot, as under a
+    constant normal load). The permanent stick radius c of the steady cycle is marked.
+
+    A kink of q(r) inside the permanent stick zone is the load path's, not the grid's.
+    The default assembly loads P and Q proportionally from zero (no slip while
+    Q/P < f, so q = (Q/P) p; Ciavarella 1998), and the first reversal of Q then slips an
+    annulus b < r < a with (b/a)³ = 1 − ΔQ/((f + Q/P) P) (Cattaneo's solution with
+    f + Q/P in place of f). That annulus is deeper than the steady one,
+    (c/a)³ = 1 − ΔQ/(2fP) (Mindlin & Deresiewicz 1953), and the traction it leaves at
+    r = b is locked in by the stick of every later cycle. For the sphere of the
+    ``halfspace_sphere`` example (P = 100 N, Q = ±30 N, f = 0.5) b = 0.63 a = 0.12 mm
+    inside c = 0.74 a = 0.14 mm; an assembly that applies P before Q leaves no kink
+    (``tests/test_figures_content.py`` checks both against these closed forms).
+    """
+    fig = _figure(8.2, 4.4)
     ax = fig.add_subplot()
     r = ds.radius.values * 1e3
+    p = ds.pressure.values / 1e6
+    one_p = bool(np.allclose(p, p[:1], rtol=1e-12, atol=0.0))
     for i, th in enumerate(ds.snapshot_theta.values):
         color = f"C{i}"
         ax.plot(r, ds.shear_traction.values[i] / 1e6, color=color, lw=1.6,
                 label=f"q, θ = {th:.2f} rad")
-        ax.plot(r, ds.pressure.values[i] / 1e6, color=color, lw=0.8, ls="--")
+        if not one_p:
+            ax.plot(r, p[i], color=color, lw=0.8, ls="--", label=f"p, θ = {th:.2f} rad")
+    if one_p:
+        ax.plot(r, p[0], color="0.3", lw=0.8, ls="--", label="p (the same at every θ)")
+    if "permanent_stick_size" in ds:
+        c = float(ds.permanent_stick_size) * 1e3
+        ax.axvline(c, color="0.4", ls=":", lw=1,
+                   label=f"permanent stick radius {c:.3g} mm")
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel("radius r [mm]")
-    ax.set_ylabel("traction [MPa]  (dashed: pressure p)")
+    ax.set_ylabel("traction [MPa]")
     ax.set_title("Shear traction q(r) and pressure p(r) in the last cycle")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
     return fig
 
 
+def _contact_edge(radius: np.ndarray) -> float:
+    """The outer edge a of the radii of :func:`slipcycle.halfspace.tractions.abel_operators`
+    (the midpoints of equal intervals of [0, a])."""
+    return float(radius[-1] + 0.5 * (radius[-1] - radius[-2])) if radius.size > 1 \
+        else float(2 * radius[0])
+
+
 def dissipation_density(ds: xr.Dataset) -> Figure:
-    """Local dissipation per unit area W(r) over the last cycle."""
+    """Local dissipation per unit area W(r) over the last cycle.
+
+    The Dataset holds W at the midpoints of equal intervals of [0, a]; the curve is closed
+    at the contact edge r = a with W(a) = 0, exact there (the pressure vanishes at the edge
+    and |q| ≤ f p, so no work is done), instead of ending at the last midpoint half an
+    interval inside, on the steep flank of W.
+    """
     fig = _figure(5.5, 4.0)
     ax = fig.add_subplot()
-    ax.plot(ds.radius * 1e3, ds.dissipation_density, color="C3")
+    radius = ds.radius.values
+    a = _contact_edge(radius)
+    ax.plot(np.r_[radius, a] * 1e3, np.r_[ds.dissipation_density.values, 0.0], color="C3",
+            label="W(r), closed by W(a) = 0")
+    ax.axvline(a * 1e3, color="0.6", ls="--", lw=0.8, label=f"contact edge a = {a * 1e3:.3g} mm")
     if "permanent_stick_size" in ds:
         c = float(ds.permanent_stick_size) * 1e3
         ax.axvline(c, color="0.4", ls=":", label=f"permanent stick radius {c:.3g} mm")
-        ax.legend()
+    ax.legend(fontsize=8, loc="upper left")
     ax.set_xlabel("radius r [mm]")
     ax.set_ylabel("W(r) [J/m²]")
     ax.set_title("Local frictional dissipation per cycle")

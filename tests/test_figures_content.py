@@ -1,0 +1,142 @@
+"""What each figure must show, tested on the matplotlib Figure objects (artists, legend
+texts, axis limits, the data drawn), not on pixels: complete legends, no empty panel
+titled with a wrong number, differences drawn where the result is a difference, outlines
+on interface maps, closed periodic loops; and the half-space traction kink explained
+against the closed forms of Cattaneo and Mindlin & Deresiewicz."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import slipcycle
+from slipcycle.examples import example_text
+
+#: the sphere of the ``halfspace_sphere`` example: P (N), Q amplitude (N), f, R (m), E* (Pa)
+P, Q1, F, R = 100.0, 30.0, 0.5, 0.01
+E_STAR = 1.0 / (2 * (1 - 0.3**2) / 200e9)
+
+
+def _sphere(protocol: str = "", steps: int = 40):
+    text = example_text("halfspace_sphere").replace("steps_per_cycle = 400",
+                                                    f"steps_per_cycle = {steps}")
+    return slipcycle.run(text + protocol)
+
+
+@pytest.fixture(scope="module")
+def proportional():
+    """The example as shipped: its assembly loads P and Q proportionally from zero."""
+    return _sphere()
+
+
+@pytest.fixture(scope="module")
+def normal_first():
+    """The same cycle, reached by pressing first and then shearing (Mindlin's path)."""
+    return _sphere("[[loading.protocol]]\nP = 100.0\nQ = 0.0\n")
+
+
+def _hertz():
+    a = (3 * P * R / (4 * E_STAR)) ** (1 / 3)
+    return a, 3 * P / (2 * np.pi * a**2)
+
+
+def _cattaneo(r, x, a, p0):
+    """p0 (x/a) √(1 − r²/x²) inside r < x, 0 outside: the stick-zone correction."""
+    return np.where(r < x, p0 * (x / a) * np.sqrt(np.clip(1 - (r / x) ** 2, 0, None)), 0.0)
+
+
+def _closed_form_q_top(r, path: str):
+    """q(r) at θ = 0 (Q = +Q1) of the steady cycle, and the radii b and c.
+
+    Steady annulus (Mindlin & Deresiewicz): (c/a)³ = 1 − 2Q1/(2fP). Proportional path
+    (q = (Q1/P) p after the assembly, no slip): the first reversal by 2Q1 slips b < r < a
+    with (b/a)³ = 1 − 2Q1/((f + Q1/P) P); superposing the Cattaneo corrections gives
+    q = f p + (f + Q1/P) p_b − 2f p_c. Normal-first path: q = f (p − p_c).
+    """
+    a, p0 = _hertz()
+    p = p0 * np.sqrt(np.clip(1 - (r / a) ** 2, 0, None))
+    c = a * (1 - Q1 / (F * P)) ** (1 / 3)
+    b = a * (1 - 2 * Q1 / ((F + Q1 / P) * P)) ** (1 / 3)
+    if path == "proportional":
+        q = F * p + (F + Q1 / P) * _cattaneo(r, b, a, p0) - 2 * F * _cattaneo(r, c, a, p0)
+    else:
+        q = F * (p - _cattaneo(r, c, a, p0))
+    return q, a, b, c
+
+
+@pytest.mark.parametrize("path", ["proportional", "normal_first"])
+def test_sphere_shear_traction_at_full_load_is_the_closed_form_of_its_load_path(
+        request, path):
+    ds = request.getfixturevalue(path).to_dataset()
+    assert float(ds.snapshot_theta[0]) == 0.0
+    r = ds.radius.values
+    q_ref, a, b, c = _closed_form_q_top(r, path)
+    _, p0 = _hertz()
+    inside = r < 0.95 * a     # away from the edge singularity of the slider cells
+    err = np.max(np.abs(ds.shear_traction.values[0][inside] - q_ref[inside])) / (F * p0)
+    assert err < 0.01, err   # 2001 sliders: 0.3 % (proportional), 2e-5 (normal first)
+    # the stick radius of the run is the closed form's c
+    assert float(ds.permanent_stick_size) == pytest.approx(c, rel=0.01)
+
+
+def test_sphere_traction_kink_inside_the_stick_zone_is_the_first_reversals_slip_edge(
+        proportional, normal_first):
+    """The kink the demo's ``tractions.png`` shows at r = 0.12 mm inside the stick radius
+    0.14 mm is physics of the load path: the edge b = 0.63 a of the annulus slipped once,
+    at the first reversal after a proportional assembly, locked in ever after. Pressing
+    first (Mindlin's path) leaves q(r) increasing over the stick zone: no kink."""
+    _, a, b, c = _closed_form_q_top(np.zeros(1), "proportional")
+    assert b / a == pytest.approx(0.63, abs=0.005)
+    assert c / a == pytest.approx(0.737, abs=0.005)
+    assert b * 1e3 == pytest.approx(0.12, abs=0.005)
+    assert c * 1e3 == pytest.approx(0.14, abs=0.005)
+    for result, kink in ((proportional, True), (normal_first, False)):
+        ds = result.to_dataset()
+        r, q = ds.radius.values, ds.shear_traction.values[0]
+        stick = r < float(ds.permanent_stick_size)
+        k = int(np.argmin(q[stick]))
+        if kink:   # the minimum over the stick zone, with q rising on both sides of it
+            assert r[k] == pytest.approx(b, abs=2 * (r[1] - r[0]))
+            assert q[k - 5] > q[k] < q[k + 5]
+        else:
+            assert k == 0
+            assert np.all(np.diff(q[stick]) > -1e-3 * F * _hertz()[1])
+
+
+def _legend_texts(ax) -> list[str]:
+    legend = ax.get_legend()
+    return [t.get_text() for t in legend.get_texts()] if legend is not None else []
+
+
+def _labelled_lines(ax) -> list[str]:
+    return [ln.get_label() for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+
+
+def test_sphere_tractions_figure_has_every_curve_in_its_legend(proportional):
+    from slipcycle.plot.halfspace import tractions
+
+    ds = proportional.to_dataset()
+    ax = tractions(ds).axes[0]
+    texts = _legend_texts(ax)
+    drawn = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]
+    assert all(not ln.get_label().startswith("_") for ln in drawn)   # none left unnamed
+    assert sorted(texts) == sorted(_labelled_lines(ax))
+    assert sum(t.startswith("q, θ") for t in texts) == ds.sizes["snapshot"]
+    assert any(t.startswith("p") for t in texts)          # the pressure is named
+    assert any("permanent stick radius" in t for t in texts)
+
+
+def test_sphere_dissipation_density_curve_ends_at_zero_on_the_contact_edge(proportional):
+    from slipcycle.plot.halfspace import dissipation_density
+
+    ds = proportional.to_dataset()
+    ax = dissipation_density(ds).axes[0]
+    (curve,) = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]
+    r, W = np.asarray(curve.get_xdata()) / 1e3, np.asarray(curve.get_ydata())
+    a, _ = _hertz()
+    assert W[-1] == 0.0
+    assert r[-1] == pytest.approx(a, rel=0.01)
+    np.testing.assert_array_equal(W[:-1], ds.dissipation_density.values)
+    # the curve drawn carries the dissipation: ∫ W 2πr dr = ∮ Q dV (energy balance)
+    D = float(ds.dissipation.values[-1])
+    assert np.trapezoid(W * 2 * np.pi * r, r) == pytest.approx(D, rel=0.01)
