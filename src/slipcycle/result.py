@@ -63,7 +63,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from slipcycle.io.results import RunOutputs
 
-__all__ = ["SteadyState", "STEADY_STATES", "RunResult", "StudyResult", "classify"]
+__all__ = ["SteadyState", "STEADY_STATES", "STEADY_MESSAGES", "RunResult", "StudyResult",
+           "classify"]
 
 
 class SteadyState(StrEnum):
@@ -74,7 +75,12 @@ class SteadyState(StrEnum):
     sticks; ``ratcheting``: slip accumulates by the same amount every cycle;
     ``gross_slip``: the contact cannot carry the tangential load (no periodic state);
     ``not_converged``: no periodic state within the cycles allowed; ``inadmissible``: the
-    initial or assembly state cannot be held.
+    initial or assembly state cannot be held; ``failed``: a run of a study that stopped
+    with a solver error.
+
+    The order is the order of severity (a study reports the worst class of its runs) and
+    :attr:`code` is the position in it: the integer stored for the class in basin maps,
+    λ scans and sweep stores (``flag_values`` / ``flag_meanings``).
     """
 
     SHAKEDOWN = "shakedown"
@@ -83,10 +89,44 @@ class SteadyState(StrEnum):
     GROSS_SLIP = "gross_slip"
     NOT_CONVERGED = "not_converged"
     INADMISSIBLE = "inadmissible"
+    FAILED = "failed"
+
+    @property
+    def code(self) -> int:
+        """The integer code of the class (its position in :data:`STEADY_STATES`)."""
+        return STEADY_STATES.index(self.value)
+
+    @property
+    def converged(self) -> bool:
+        """Whether the class is that of a periodic (or ratcheting) state reached."""
+        return self in (SteadyState.SHAKEDOWN, SteadyState.CYCLIC_SLIP,
+                        SteadyState.RATCHETING)
+
+    @classmethod
+    def of_code(cls, code: int) -> SteadyState:
+        """The class of an integer code (inverse of :attr:`code`)."""
+        return cls(STEADY_STATES[int(code)])
+
+    @classmethod
+    def worst(cls, words) -> SteadyState:
+        """The most severe class among ``words`` (later in the enumeration is worse)."""
+        return cls(max((cls(w) for w in words), key=lambda s: s.code))
 
 
-#: every word of :class:`SteadyState`, in order (position = code in sweep stores)
+#: every word of :class:`SteadyState`, in order (position = code in every store); the
+#: one list of steady-state words of the project
 STEADY_STATES: tuple[str, ...] = tuple(s.value for s in SteadyState)
+
+#: the sentence a run result's ``message`` starts with, per class
+STEADY_MESSAGES: dict[str, str] = {
+    "shakedown": "shakedown: no node slips in the steady cycle",
+    "cyclic_slip": "cyclic slip: some nodes slip every cycle, the others stay stuck",
+    "ratcheting": "ratcheting: slip accumulates by the same amount every cycle",
+    "gross_slip": "gross slip: the contact cannot carry the tangential load",
+    "not_converged": "no steady cycle within the cycles allowed",
+    "inadmissible": "the initial state cannot be held at θ = 0",
+    "failed": "the run stopped with a solver error",
+}
 
 
 def classify(*, converged: bool, slips: bool, gross_slip: bool = False,
@@ -302,9 +342,9 @@ class RunResult(_Contract):
 class StudyResult(_Contract):
     """Base of every analysis result (a study of many runs), with the output methods.
 
-    Subclasses (one per analysis: :class:`slipcycle.discrete.shakedown_study.ShakedownResult`,
-    :class:`slipcycle.discrete.basins.BasinsResult`,
-    :class:`slipcycle.halfspace.map_study.WHatMapResult`,
+    Subclasses (one per analysis: :class:`slipcycle.studies.shakedown.ShakedownResult`,
+    :class:`slipcycle.studies.basins.BasinsResult`,
+    :class:`slipcycle.studies.w_hat_map.WHatMapResult`,
     :class:`slipcycle.rods.limits.LimitsResult`) hold the analysis' numbers as fields and
     implement :meth:`summary`, :meth:`to_dataset` (the one place the analysis' Dataset is
     built), :meth:`figures` and :meth:`headline`; they set :attr:`model`,

@@ -21,6 +21,7 @@ from functools import cached_property
 
 import numpy as np
 
+from slipcycle.coupled.system import CoupledSystem
 from slipcycle.errors import ModelError
 
 __all__ = ["FrictionalSystem", "ModelError", "STICK", "SLIP_POS", "SLIP_NEG", "SEPARATED",
@@ -62,7 +63,7 @@ def _check_spd(name: str, M: np.ndarray, rtol: float = 1e-10) -> None:
 
 
 @dataclass(frozen=True)
-class FrictionalSystem:
+class FrictionalSystem(CoupledSystem):
     """A validated coupled discrete frictional system.
 
     Parameters
@@ -104,6 +105,8 @@ class FrictionalSystem:
     K: np.ndarray = field(init=False, repr=False, compare=False)
     accept_ill_posed: bool = field(default=False, compare=False)
     f_crit_exact_max_nodes: int = field(default=10, compare=False, repr=False)
+
+    ILL_POSED = "the rate problem is ill posed (Klarbring P-matrix condition)"
 
     def __post_init__(self):
         A = _square("A", self.A, None)
@@ -164,32 +167,6 @@ class FrictionalSystem:
         return critical_friction(self.A, self.B, self.friction,
                                  exact_max_nodes=self.f_crit_exact_max_nodes)
 
-    def _check_well_posed(self) -> None:
-        fc = self.critical_friction
-        fmax = float(np.max(self.friction))
-        if fmax >= fc.f_crit:
-            raise ModelError("friction",
-                             f"f = {fmax:g} is not below the critical friction coefficient "
-                             f"f_crit = {fc.f_crit:.6g} ({fc.method}; nodes {list(fc.nodes)}, "
-                             f"slip signs {list(fc.signs)}): the rate problem is ill posed "
-                             "(Klarbring P-matrix condition)",
-                             remedy=("accept_ill_posed", True, "run anyway"))
-
-    @property
-    def n_nodes(self) -> int:
-        """Number of contact nodes N."""
-        return self.A.shape[0]
-
-    @property
-    def uncoupled(self) -> bool:
-        """True if B = 0 (frictional Melan theorem applies)."""
-        return not np.any(self.B)
-
-    def reactions(self, x: np.ndarray, r_w: np.ndarray) -> np.ndarray:
-        """Reactions ``r = [q, p] = r^w + K x`` for a state ``x = [v, w]`` (both (2N,) or
-        (..., 2N)), in N."""
-        return r_w + x @ self.K.T
-
-    def stiffness_scale(self) -> float:
-        """A typical stiffness (largest diagonal entry of K), N/m."""
-        return float(np.max(np.diag(self.K)))
+    def _ill_posed_nodes(self, fc) -> str:
+        """The critical nodes and their slip signs (the 2-D rate problem has both)."""
+        return f"nodes {list(fc.nodes)}, slip signs {list(fc.signs)}"

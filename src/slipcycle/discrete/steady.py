@@ -32,6 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from slipcycle.coupled.settings import SolverStats
+from slipcycle.coupled.solution import CYCLE_CLASSES, CycleSolution, last_cycle
 from slipcycle.discrete.evolution import Evolution
 from slipcycle.discrete.lcp import lemke
 from slipcycle.discrete.loads import DiscreteLoad
@@ -50,16 +52,17 @@ from slipcycle.discrete.periodic import (
 from slipcycle.errors import InadmissibleInitialState
 from slipcycle.kernels.creep import creep_distance
 from slipcycle.loading.nodal import force_scale
+from slipcycle.result import STEADY_STATES
 
 __all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
            "STEADY_CLASSES", "STEADY_CODES", "ACCELERATE_MIN_NODES"]
 
-STEADY_CLASSES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged")
+#: the classes :func:`simulate` ends in (:data:`slipcycle.coupled.solution.CYCLE_CLASSES`)
+STEADY_CLASSES = CYCLE_CLASSES
 
-#: integer codes of ``steady_state`` in the stores of the basin maps and λ scans (position
-#: of the word): the classes of :func:`simulate`, then a start that is not admissible at
-#: θ = 0 and a run that failed
-STEADY_CODES = STEADY_CLASSES + ("inadmissible", "failed")
+#: deprecated alias (for one release) of :data:`slipcycle.result.STEADY_STATES`, the one
+#: list of steady-state words with their integer codes
+STEADY_CODES = STEADY_STATES
 
 #: smallest system stepped to its periodic state by default (``simulate(accelerate=None)``);
 #: smaller ones cycle plainly: a cycle costs them little, and their cycle counts are the
@@ -292,84 +295,23 @@ def _before_a_stop(jac: CycleJacobian, episode_log: list, d: np.ndarray,
     return max(min(1.0, float(np.min(room[hit] / -use[hit]))), 0.0)
 
 
-@dataclass
-class SteadyResult:
-    """Outcome of :func:`simulate` (all arrays in SI units; node indices from 0).
+@dataclass(kw_only=True)
+class SteadyResult(CycleSolution):
+    """Outcome of :func:`simulate`: the fields of
+    :class:`~slipcycle.coupled.solution.CycleSolution` (M = 2N: ``x = [v, w]``; ``modes``
+    0 stick, 1 slip_positive, 2 slip_negative, 3 separated, on the last piece before each
+    sample) and those of the exact 2-D engine.
 
     Attributes
     ----------
-    steady_state : str
-        One of ``shakedown``, ``cyclic_slip``, ``ratcheting``, ``not_converged``.
-    residual : float
-        max |x_c − x_{c−1}| of the start-of-cycle states of the last two cycles, relative
-        to the displacement scale (for ratcheting: of their differences).
-    cycles_run : int
-    dissipation_per_node : (N,) array
-        D_j of the last cycle run [J].
-    work_of_loads : float
-        ∮ (vᵀdq^w + wᵀdp^w) over the last cycle run [J].
-    slipping_nodes, permanently_stuck_nodes, separating_nodes : lists of int
-    theta : (n+1,) array
-        Load sample angles of one cycle [rad].
-    x, r : (cycles_run, n+1, 2N) arrays
-        States [v, w] (m) and reactions [q, p] (N) at the samples of every cycle run.
-    modes : (cycles_run, n+1, N) int8 array
-        Node state on the last piece before each sample (0 stick, 1 slip_positive,
-        2 slip_negative, 3 separated).
-    cycle_start_states : (cycles_run+1, 2N) array
     events_per_cycle : list of int
-    ratchet_per_cycle : (N,) array
-        Slip increment per cycle v_c − v_{c−1} of the last cycle [m].
-    slip_length : (N,) array
-        ∫|v̇_j| dθ over the last cycle [m].
-    slip_tolerance : float
-        Slip length [m] at or below which a node counts as stuck in the last cycle:
-        max(100 tol, 1e-9) × the displacement scale (round-off, not slip).
+        Events located in each cycle.
+    initial_state : (2N,) array or None
+        The state at θ = 0 before the first cycle [m].
     """
 
-    steady_state: str
-    residual: float
-    cycles_run: int
-    dissipation_per_node: np.ndarray
-    work_of_loads: float
-    slipping_nodes: list
-    permanently_stuck_nodes: list
-    separating_nodes: list
-    theta: np.ndarray
-    x: np.ndarray
-    r: np.ndarray
-    modes: np.ndarray
-    cycle_start_states: np.ndarray
-    events_per_cycle: list
-    ratchet_per_cycle: np.ndarray
-    all_slip_or_separated: bool
-    disp_scale: float
-    solver_stats: dict = field(default_factory=dict)
-    dissipation_history: list = field(default_factory=list)
+    events_per_cycle: list = field(default_factory=list)
     initial_state: np.ndarray | None = None
-    stored_energy_change: float = 0.0
-    force_scale: float = 1.0
-    slip_length: np.ndarray | None = None
-    slip_tolerance: float = 0.0
-
-    @property
-    def dissipation_per_cycle(self) -> float:
-        """Total dissipation of the last (steady) cycle, J."""
-        return float(np.sum(self.dissipation_per_node))
-
-    @property
-    def energy_balance_error(self) -> float:
-        """|W − Σ D_j − ΔΠ| over the last cycle, relative to max(|W|, |Σ D_j|, F·x_scale).
-
-        ΔΠ is the change of the stored energy Π = ½ xᵀKx + r^wᵀx over the cycle (zero once
-        the cycle is steady, so that Σ D_j = W)."""
-        d = self.dissipation_per_cycle
-        ref = max(abs(d), abs(self.work_of_loads), self.force_scale * self.disp_scale)
-        return abs(self.work_of_loads - d - self.stored_energy_change) / ref
-
-    @property
-    def steady_converged(self) -> bool:
-        return self.steady_state != "not_converged"
 
 
 def initial_state(system: FrictionalSystem, r_w: np.ndarray, v0: np.ndarray,
@@ -672,30 +614,9 @@ def _assembled(system: FrictionalSystem, r0: np.ndarray, F: float,
 def _steady_result(system, evo, state, residual, ratchet, totals, starts, events, diss_hist,
                    records, theta, vals, tol, disp_scale, F, x_init, jstats) -> SteadyResult:
     """Classify the last cycle (stuck, slipping and separating nodes) and pack the run."""
-    n = system.n_nodes
-    slip_tol = max(100 * tol, 1e-9) * max(disp_scale, float(np.max(np.abs(starts[-1]))))
-    slipping = np.flatnonzero(totals.slip_length > slip_tol)
-    separating = np.flatnonzero(totals.separated)
-    stuck = np.flatnonzero((totals.slip_length <= slip_tol) & ~totals.separated)
-    if state == "steady":
-        state = "shakedown" if slipping.size == 0 else "cyclic_slip"
-    if state != "ratcheting":
-        ratchet = starts[-1][:n] - starts[-2][:n]
-    x0, x1 = starts[-2], starts[-1]
-    K = system.K
-    d_stored = float(0.5 * (x1 @ K @ x1 - x0 @ K @ x0) + vals[0] @ (x1 - x0))
-    if records is not None and records[0]:
-        X, R, Mo = (np.array(a) for a in records)
-    else:
-        X = R = np.zeros((0, len(theta), 2 * n))
-        Mo = np.zeros((0, len(theta), n), np.int8)
     return SteadyResult(
-        steady_state=state, residual=residual, cycles_run=len(events),
-        dissipation_per_node=totals.dissipation.copy(), work_of_loads=totals.work,
-        slipping_nodes=slipping.tolist(), permanently_stuck_nodes=stuck.tolist(),
-        separating_nodes=separating.tolist(), theta=theta, x=X, r=R, modes=Mo,
-        cycle_start_states=np.array(starts), events_per_cycle=events,
-        ratchet_per_cycle=ratchet, all_slip_or_separated=totals.all_slip_or_separated,
-        disp_scale=disp_scale, solver_stats={**evo.solver.stats, **jstats},
-        dissipation_history=diss_hist, initial_state=x_init, stored_energy_change=d_stored,
-        force_scale=F, slip_length=totals.slip_length.copy(), slip_tolerance=slip_tol)
+        residual=residual, cycles_run=len(events), theta=theta, events_per_cycle=events,
+        solver_stats=SolverStats(solver=dict(evo.solver.stats), **jstats),
+        dissipation_history=diss_hist, initial_state=x_init, force_scale=F,
+        **last_cycle(system, state, ratchet, totals, starts, tol, disp_scale, vals[0],
+                     records, len(theta)))

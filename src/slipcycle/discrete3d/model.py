@@ -30,6 +30,7 @@ from functools import cached_property
 
 import numpy as np
 
+from slipcycle.coupled.system import CoupledSystem
 from slipcycle.discrete3d.wellposed import critical_friction_3d
 from slipcycle.errors import ModelError
 
@@ -98,7 +99,7 @@ def _optional(name: str, value, shape: tuple) -> np.ndarray | None:
 
 
 @dataclass(frozen=True)
-class FrictionalSystem3D:
+class FrictionalSystem3D(CoupledSystem):
     """A validated 3-D coupled discrete frictional system (isotropic Coulomb cone).
 
     Parameters
@@ -142,6 +143,10 @@ class FrictionalSystem3D:
     area: np.ndarray | float = 1.0
     accept_ill_posed: bool = field(default=False, compare=False)
     K: np.ndarray = field(init=False, repr=False, compare=False)
+
+    ERROR = ModelError3D
+    ILL_POSED = ("the incremental problem is ill posed (P-matrix condition on the cone's "
+                 "slip directions)")
 
     def __post_init__(self):
         try:
@@ -212,36 +217,6 @@ class FrictionalSystem3D:
         """The sampled critical friction coefficient of the cone and its certified lower
         bound (:class:`~slipcycle.discrete3d.wellposed.CriticalFriction3D`)."""
         return critical_friction_3d(self.A, self.B, self.C, self.friction)
-
-    def _check_well_posed(self) -> None:
-        fc = self.critical_friction
-        fmax = float(np.max(self.friction))
-        if fmax >= fc.f_crit:
-            raise ModelError3D("friction",
-                               f"f = {fmax:g} is not below the critical friction coefficient "
-                               f"f_crit = {fc.f_crit:.6g} ({fc.method}; nodes "
-                               f"{list(fc.nodes)}): the incremental problem is ill posed "
-                               "(P-matrix condition on the cone's slip directions)",
-                               remedy=("accept_ill_posed", True, "run anyway"))
-
-    @property
-    def n_nodes(self) -> int:
-        """Number of contact nodes N."""
-        return self.C.shape[0]
-
-    @property
-    def uncoupled(self) -> bool:
-        """True if B = 0 (the frictional Melan theorem applies)."""
-        return not np.any(self.B)
-
-    def reactions(self, x: np.ndarray, r_w: np.ndarray) -> np.ndarray:
-        """Reactions ``r = [q, p] = r^w + K x`` for states ``x = [v, w]`` ((3N,) or
-        (..., 3N)), in N."""
-        return r_w + x @ self.K.T
-
-    def stiffness_scale(self) -> float:
-        """A typical stiffness (largest diagonal entry of K), N/m."""
-        return float(np.max(np.diag(self.K)))
 
 
 def embed_2d(A2, B2, C2, friction, *, accept_ill_posed: bool = True) -> FrictionalSystem3D:

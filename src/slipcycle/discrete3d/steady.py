@@ -95,6 +95,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import nnls
 
+from slipcycle.coupled.settings import SolverStats
+from slipcycle.coupled.solution import CYCLE_CLASSES, CycleSolution, last_cycle
 from slipcycle.discrete3d.evolution import Evolution3D
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
@@ -106,7 +108,8 @@ from slipcycle.loading.nodal import force_scale
 __all__ = ["SteadyResult3D", "simulate3d", "initial_state_3d", "InadmissibleInitialState3D",
            "STEADY_CLASSES"]
 
-STEADY_CLASSES = ("shakedown", "cyclic_slip", "ratcheting", "not_converged")
+#: the classes :func:`simulate3d` ends in (:data:`slipcycle.coupled.solution.CYCLE_CLASSES`)
+STEADY_CLASSES = CYCLE_CLASSES
 
 #: Anderson mixing of the cycle starts: secant pairs used, largest rise of the residual
 #: over the best one of the run, and jumps allowed without improving on it
@@ -119,84 +122,54 @@ class InadmissibleInitialState3D(InadmissibleInitialState):
     """The initial slip violates the cone or contact at θ = 0 (node, margin f p − |q|)."""
 
 
-@dataclass
-class SteadyResult3D:
-    """Outcome of :func:`simulate3d` (SI units; nodes numbered from 0).
+@dataclass(kw_only=True)
+class SteadyResult3D(CycleSolution):
+    """Outcome of :func:`simulate3d`: the fields of
+    :class:`~slipcycle.coupled.solution.CycleSolution` (M = 3N: ``x = [v, w]`` with
+    node-major (t1, t2) slips; ``modes`` 0 stick, 1 slip, 2 separated at the end of the
+    step reaching each sample) and those of the step-controlled 3-D engine.
 
     Attributes
     ----------
-    steady_state : str
-        ``shakedown``, ``cyclic_slip``, ``ratcheting`` or ``not_converged``.
-    residual : float
-        max |x_c − x_{c−1}| of the last two start-of-cycle states / displacement scale.
-    cycles_run : int
-    dissipation_per_node : (N,) array
-        D_j of the last cycle [J].
-    work_of_loads : float
-        ∮ (vᵀdq^w + wᵀdp^w) of the last cycle [J].
-    theta : (n+1,) array
-        Sample angles of one cycle [rad].
-    x, r : (cycles_run, n+1, 3N) arrays
-        States [v, w] (m) and reactions [q, p] (N) at the samples of every cycle.
-    modes : (cycles_run, n+1, N) int8 array
-        Node state at the end of the step reaching each sample (0 stick, 1 slip,
-        2 separated).
-    cycle_start_states : (cycles_run + 1, 3N) array
-    slip_length : (N,) array
-        ∮|dv_j| over the last cycle [m].
+    steps_per_cycle_taken, refinements_per_cycle : list of int
+        Load steps taken and step refinements of each cycle.
+    normal_work : float
+        Work of the normal loads on opening steps of the last cycle [J] (part of the
+        energy balance error).
+    unresolved_steps : int
+        Steps whose error estimate stayed above the tolerance at the smallest step.
     """
 
-    steady_state: str
-    residual: float
-    cycles_run: int
-    dissipation_per_node: np.ndarray
-    work_of_loads: float
-    slipping_nodes: list
-    permanently_stuck_nodes: list
-    separating_nodes: list
-    theta: np.ndarray
-    x: np.ndarray
-    r: np.ndarray
-    modes: np.ndarray
-    cycle_start_states: np.ndarray
-    ratchet_per_cycle: np.ndarray
-    all_slip_or_separated: bool
-    disp_scale: float
-    force_scale: float
-    slip_length: np.ndarray
-    slip_tolerance: float
     steps_per_cycle_taken: list = field(default_factory=list)
     refinements_per_cycle: list = field(default_factory=list)
-    dissipation_history: list = field(default_factory=list)
-    stored_energy_change: float = 0.0
     normal_work: float = 0.0
-    solver_stats: dict = field(default_factory=dict)
     unresolved_steps: int = 0
-    #: extrapolation jumps of the start-of-cycle state (accepted, undone)
-    jumps: int = 0
-    jumps_undone: int = 0
-    #: cycles run on a frozen subdivision, subdivisions frozen, and replayed sub-steps
-    #: that did not fit (redone adaptively)
-    replayed_cycles: int = 0
-    replay_freezes: int = 0
-    replay_mismatches: int = 0
+
+    # the accelerators' counts (:class:`~slipcycle.coupled.settings.SolverStats`)
+    @property
+    def jumps(self) -> int:
+        """Extrapolation jumps of the start-of-cycle state accepted."""
+        return self.solver_stats.jumps
 
     @property
-    def dissipation_per_cycle(self) -> float:
-        """Total dissipation of the last cycle [J]."""
-        return float(np.sum(self.dissipation_per_node))
+    def jumps_undone(self) -> int:
+        """Extrapolation jumps undone."""
+        return self.solver_stats.jumps_undone
 
     @property
-    def energy_balance_error(self) -> float:
-        """|W − ΣD − ΔΠ| of the last cycle / max(|W|, |ΣD|, F·x_scale) (ΔΠ: change of
-        ½xᵀKx + r^wᵀx; the normal-work term of opening steps is part of the error)."""
-        d = self.dissipation_per_cycle
-        ref = max(abs(d), abs(self.work_of_loads), self.force_scale * self.disp_scale)
-        return abs(self.work_of_loads - d - self.stored_energy_change) / ref
+    def replayed_cycles(self) -> int:
+        """Cycles run on a frozen subdivision."""
+        return self.solver_stats.replayed_cycles
 
     @property
-    def steady_converged(self) -> bool:
-        return self.steady_state != "not_converged"
+    def replay_freezes(self) -> int:
+        """Subdivisions frozen."""
+        return self.solver_stats.replay_freezes
+
+    @property
+    def replay_mismatches(self) -> int:
+        """Replayed sub-steps that did not fit (redone adaptively)."""
+        return self.solver_stats.replay_mismatches
 
 
 def initial_state_3d(system: FrictionalSystem3D, r_w: np.ndarray, v0: np.ndarray,
@@ -494,35 +467,16 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                 plain_from = len(starts) - 1
     if state == "not_converged" and increment_steady:
         state = "steady"          # the cycles ran out after the increment test
-    slip_tol = max(100 * tol, 1e-9) * max(disp_scale, float(np.max(np.abs(starts[-1]))))
-    slipping = np.flatnonzero(totals.slip_length > slip_tol)
-    separating = np.flatnonzero(totals.separated)
-    stuck = np.flatnonzero((totals.slip_length <= slip_tol) & ~totals.separated)
-    if state == "steady":
-        state = "shakedown" if slipping.size == 0 else "cyclic_slip"
-    if state != "ratcheting":
-        ratchet = starts[-1][:2 * n] - starts[-2][:2 * n]
-    x0, x1 = starts[-2], starts[-1]
-    K = system.K
-    d_stored = float(0.5 * (x1 @ K @ x1 - x0 @ K @ x0) + vals[0] @ (x1 - x0))
-    if record and xs:
-        X, R, Mo = np.array(xs), np.array(rs), np.array(ms)
-    else:
-        X = R = np.zeros((0, len(theta), 3 * n))
-        Mo = np.zeros((0, len(theta), n), np.int8)
+    stats = SolverStats(solver=dict(evo.solver.stats), jumps=jumps, jumps_undone=undone,
+                        replayed_cycles=replayed, replay_freezes=freezes,
+                        replay_mismatches=mismatches)
     return SteadyResult3D(
-        steady_state=state, residual=residual, cycles_run=len(diss_hist),
-        dissipation_per_node=totals.dissipation.copy(), work_of_loads=totals.work,
-        slipping_nodes=slipping.tolist(), permanently_stuck_nodes=stuck.tolist(),
-        separating_nodes=separating.tolist(), theta=theta, x=X, r=R, modes=Mo,
-        cycle_start_states=np.array(starts), ratchet_per_cycle=ratchet,
-        all_slip_or_separated=totals.all_slip_or_separated, disp_scale=disp_scale,
-        force_scale=F, slip_length=totals.slip_length.copy(), slip_tolerance=slip_tol,
+        residual=residual, cycles_run=len(diss_hist), theta=theta, force_scale=F,
         steps_per_cycle_taken=steps, refinements_per_cycle=refs,
-        dissipation_history=diss_hist, stored_energy_change=d_stored,
-        normal_work=totals.normal_work, solver_stats=dict(evo.solver.stats),
-        unresolved_steps=unresolved, jumps=jumps, jumps_undone=undone,
-        replayed_cycles=replayed, replay_freezes=freezes, replay_mismatches=mismatches)
+        dissipation_history=diss_hist, normal_work=totals.normal_work,
+        solver_stats=stats, unresolved_steps=unresolved,
+        **last_cycle(system, state, ratchet, totals, starts, tol, disp_scale, vals[0],
+                     (xs, rs, ms) if record else None, len(theta)))
 
 
 def _geometric(states: np.ndarray, spread: float = 1.1) -> bool:

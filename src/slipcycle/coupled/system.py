@@ -1,0 +1,64 @@
+"""System methods shared by the 2-D and 3-D coupled discrete frictional systems.
+
+Both store the reduced stiffness ``K = [[A, Bᵀ], [B, C]]`` with C the N×N normal block, and
+states and reactions tangential part first, ``x = [v, w]``, ``r = [q, p] = r^w + K x``
+(J. R. Barber, J. Phys.: Conf. Ser. 382 (2012) 012002, §3).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from slipcycle.errors import ModelError
+
+__all__ = ["CoupledSystem"]
+
+
+class CoupledSystem:
+    """Mix-in of the coupled discrete systems: what does not depend on the dimension.
+
+    A subclass is a frozen dataclass with the arrays ``A``, ``B``, ``C``, ``K`` and
+    ``friction``, a ``critical_friction`` property (``f_crit``, ``method``, ``nodes``),
+    and sets :attr:`ERROR` (the :class:`~slipcycle.errors.ModelError` it raises) and
+    :attr:`ILL_POSED` (why f ≥ f_crit is refused, in words).
+    """
+
+    #: the error class of the model
+    ERROR: type[ModelError] = ModelError
+    #: what f ≥ f_crit makes ill posed, and by which condition
+    ILL_POSED: str = ""
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of contact nodes N."""
+        return self.C.shape[0]
+
+    @property
+    def uncoupled(self) -> bool:
+        """True if B = 0 (the frictional Melan theorem applies)."""
+        return not np.any(self.B)
+
+    def reactions(self, x: np.ndarray, r_w: np.ndarray) -> np.ndarray:
+        """Reactions ``r = [q, p] = r^w + K x`` [N] for states ``x = [v, w]`` [m], of shape
+        (M,) or (..., M) with M the number of degrees of freedom."""
+        return r_w + x @ self.K.T
+
+    def stiffness_scale(self) -> float:
+        """A typical stiffness (largest diagonal entry of K) [N/m]."""
+        return float(np.max(np.diag(self.K)))
+
+    def _ill_posed_nodes(self, fc) -> str:
+        """The nodes (and what else the model reports) of the critical combination."""
+        return f"nodes {list(fc.nodes)}"
+
+    def _check_well_posed(self) -> None:
+        """Refuse f ≥ f_crit (Klarbring's P-matrix condition), keyed ``friction``, with the
+        remedy ``accept_ill_posed = true``."""
+        fc = self.critical_friction
+        fmax = float(np.max(self.friction))
+        if fmax >= fc.f_crit:
+            raise self.ERROR("friction",
+                             f"f = {fmax:g} is not below the critical friction coefficient "
+                             f"f_crit = {fc.f_crit:.6g} ({fc.method}; "
+                             f"{self._ill_posed_nodes(fc)}): {self.ILL_POSED}",
+                             remedy=("accept_ill_posed", True, "run anyway"))
