@@ -24,9 +24,9 @@ def _row(name, value, unit, target):
 
 def benchmarks() -> list[dict]:
     from slipcycle.halfspace.model import solve
-    from slipcycle.halfspace.roughness_study import parse_roughness_case, roughness_study
     from slipcycle.halfspace.topography import bem_normal_law, read_surface, resample
     from slipcycle.io import read_case
+    from slipcycle.studies.roughness import parse_roughness_case, roughness_study
 
     rows = []
     with tempfile.TemporaryDirectory() as cache:

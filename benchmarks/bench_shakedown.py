@@ -32,8 +32,8 @@ EXAMPLE = HERE.parent / "src" / "slipcycle" / "examples" / "shakedown_triangle.t
 def basin_map(grid: int = 201) -> float:
     """Wall time [s] of the basins study of ``grid`` × ``grid`` starts (``slipcycle basins
     --grid``: admissible box, runs, Zarr store, safe region, result), one process."""
-    from slipcycle.discrete.basins import basins_study
     from slipcycle.io import read_case
+    from slipcycle.studies.basins import basins_study
 
     case = read_case(EXAMPLE)
     with tempfile.TemporaryDirectory() as tmp:
@@ -75,7 +75,7 @@ steps_per_cycle = 100
 
 def lam_sweep(workers: int, n: int = 200, lams: int = 41, starts: int = 8,
               group: bool = True) -> float:
-    from slipcycle.discrete.basins import lam_start_task
+    from slipcycle.studies.basins import lam_start_task
     from slipcycle.sweep import Axis, run_sweep
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -96,7 +96,7 @@ def worker_startup(n: int = 200) -> tuple[float, float]:
     """Extra wall time of one λ-sweep task in a fresh local worker over a warm process:
     (first pool of a process, which starts the fork server that imports the task's module
     and initialises Numba; a later pool, whose workers are forks of that server)."""
-    from slipcycle.discrete.basins import lam_start_task
+    from slipcycle.studies.basins import lam_start_task
     from slipcycle.sweep.core import _local_pool
 
     params = {"lam": 0.2, "start": 0}

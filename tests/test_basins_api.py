@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slipcycle.discrete.basins import basins_study, parse_range, read_protocols
 from slipcycle.discrete.steady import STEADY_CODES
 from slipcycle.io import CaseError, read_case
+from slipcycle.studies.basins import basins_study, parse_range, read_protocols
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 

@@ -17,16 +17,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from slipcycle.discrete.basins import (
-    INADMISSIBLE,
-    admissible_box,
+from slipcycle.discrete.basins import INADMISSIBLE, admissible_box, run_record
+from slipcycle.io import read_case
+from slipcycle.studies.basins import (
     basin_block_task,
     basins_study,
     grid_blocks,
     load_discrete_case,
-    run_record,
 )
-from slipcycle.io import read_case
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples" / \
     "shakedown_triangle.toml"

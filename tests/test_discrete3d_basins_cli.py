@@ -11,14 +11,14 @@ import xarray as xr
 
 import slipcycle
 from slipcycle.discrete3d.basins import basins3d, random_starts
-from slipcycle.discrete3d.basins_study import (
+from slipcycle.io import parse_case_text
+from slipcycle.studies.basins3d import (
     STEADY_CODES,
     Basins3DResult,
     basins3d_study,
     load_discrete3d_case,
     start_scale,
 )
-from slipcycle.io import parse_case_text
 
 EXAMPLE = Path(slipcycle.__file__).parent / "examples" / "discrete3d_three_node.toml"
 

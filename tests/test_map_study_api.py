@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from slipcycle.halfspace.map_study import (
+from slipcycle.io import CaseError, parse_case_text
+from slipcycle.studies.w_hat_map import (
     CUBIC_LAW_Q1_HAT,
     FIG7_PHASE,
     cubic_law_slope,
@@ -13,7 +14,6 @@ from slipcycle.halfspace.map_study import (
     parse_map_case,
     w_hat_study,
 )
-from slipcycle.io import CaseError, parse_case_text
 
 SMALL = """
 model = "halfspace"

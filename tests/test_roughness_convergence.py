@@ -16,7 +16,6 @@ pytest.importorskip("ContactMechanics")
 pytest.importorskip("SurfaceTopography")
 
 from slipcycle.halfspace.model import solve  # noqa: E402
-from slipcycle.halfspace.roughness_study import parse_roughness_case  # noqa: E402
 from slipcycle.halfspace.topography import (  # noqa: E402
     bem_normal_law,
     fit_exponential,
@@ -25,6 +24,7 @@ from slipcycle.halfspace.topography import (  # noqa: E402
     smooth_table,
 )
 from slipcycle.io import read_case  # noqa: E402
+from slipcycle.studies.roughness import parse_roughness_case  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 

@@ -13,7 +13,6 @@ from slipcycle.halfspace import RoughExponential
 from slipcycle.halfspace.loads import contact_loads
 from slipcycle.halfspace.model import HalfspaceModel, solve
 from slipcycle.halfspace.profiles import FlatPunch
-from slipcycle.halfspace.roughness_study import cutoff_within, local_dissipation, punch_rings
 from slipcycle.halfspace.topography import (
     BEMLaw,
     convex_minorant,
@@ -21,6 +20,7 @@ from slipcycle.halfspace.topography import (
     read_table_file,
     smooth_table,
 )
+from slipcycle.studies.roughness import cutoff_within, local_dissipation, punch_rings
 
 
 def synthetic_law(gamma_sigma, P_knee, decades_exp, noise, seed=0):

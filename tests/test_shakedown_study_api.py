@@ -9,9 +9,9 @@ import pytest
 
 from slipcycle.discrete.case import read_discrete_case
 from slipcycle.discrete.shakedown import lambda1, lambda2, safe_region
-from slipcycle.discrete.shakedown_study import SUMMARY_UNITS, shakedown_study
 from slipcycle.discrete.steady import STEADY_CODES
 from slipcycle.io import CaseError, read_case
+from slipcycle.studies.shakedown import SUMMARY_UNITS, shakedown_study
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 

@@ -110,9 +110,9 @@ def _check_display(result: StudyResult, cls: str, model: str, analysis: str):
 
 
 def test_shakedown_result_is_what_the_command_writes(run_cli, monkeypatch, tmp_path):
-    from slipcycle.discrete.shakedown_study import ShakedownResult
+    from slipcycle.studies.shakedown import ShakedownResult
 
-    kept = _capture(monkeypatch, "slipcycle.discrete.shakedown_study", "shakedown_study")
+    kept = _capture(monkeypatch, "slipcycle.studies.shakedown", "shakedown_study")
     out = tmp_path / "sd"
     code, _, err = run_cli("shakedown", EXAMPLES / "shakedown_triangle.toml", "--out", out,
                            "--lam-points", "4", "--starts", "1", "--lam-tol", "0.25",
@@ -129,9 +129,9 @@ def test_shakedown_result_is_what_the_command_writes(run_cli, monkeypatch, tmp_p
 
 @pytest.mark.parametrize("mode", [("--grid", "5"), ("--random", "3")], ids=["grid", "random"])
 def test_basins_result_is_what_the_command_writes(run_cli, monkeypatch, tmp_path, mode):
-    from slipcycle.discrete.basins import BasinsResult
+    from slipcycle.studies.basins import BasinsResult
 
-    kept = _capture(monkeypatch, "slipcycle.discrete.basins", "basins_study")
+    kept = _capture(monkeypatch, "slipcycle.studies.basins", "basins_study")
     out = tmp_path / "b"
     code, _, err = run_cli("basins", EXAMPLES / "shakedown_triangle.toml", "--out", out,
                            *mode, "--workers", "1", "--no-progress")
@@ -145,8 +145,8 @@ def test_basins_result_is_what_the_command_writes(run_cli, monkeypatch, tmp_path
 
 
 def test_basins_stopped_early_has_no_result(tmp_path):
-    from slipcycle.discrete.basins import basins_study
     from slipcycle.io import read_case
+    from slipcycle.studies.basins import basins_study
 
     case = read_case(EXAMPLES / "shakedown_triangle.toml")
     status = basins_study(case, tmp_path, grid=3, workers=1, progress=False, stop_after=1)
@@ -155,9 +155,9 @@ def test_basins_stopped_early_has_no_result(tmp_path):
 
 def test_w_hat_map_result_is_what_the_command_writes(run_cli, write_case, monkeypatch,
                                                      tmp_path):
-    from slipcycle.halfspace.map_study import WHatMapResult
+    from slipcycle.studies.w_hat_map import WHatMapResult
 
-    kept = _capture(monkeypatch, "slipcycle.halfspace.map_study", "w_hat_map_study")
+    kept = _capture(monkeypatch, "slipcycle.studies.w_hat_map", "w_hat_map_study")
     out = tmp_path / "map"
     code, _, err = run_cli("map", write_case(MAP_CASE), "--out", out)
     assert code == 0, err
@@ -187,8 +187,8 @@ def test_limits_result_is_what_the_command_writes(run_cli, write_case, monkeypat
 
 def test_the_outputs_functions_give_the_result_outputs():
     """``w_hat_study`` and ``run_limits`` (RunOutputs) are the results' ``to_outputs()``."""
-    from slipcycle.halfspace.map_study import parse_map_case, w_hat_map_study, w_hat_study
     from slipcycle.io import parse_case_text
+    from slipcycle.studies.w_hat_map import parse_map_case, w_hat_map_study, w_hat_study
 
     args = parse_map_case(parse_case_text(MAP_CASE))
     out = w_hat_study(*args)

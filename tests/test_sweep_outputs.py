@@ -13,7 +13,7 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from slipcycle.sweep.case import summary_numbers
+from slipcycle.studies.case_sweep import summary_numbers
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from slipcycle.studies.case_sweep import apply_overrides, make_task, parse_set
 from slipcycle.sweep import Axis, SweepError, run_sweep
-from slipcycle.sweep.case import apply_overrides, make_task, parse_set
 from slipcycle.sweep.core import TaskRunner, parse_values, worker_threads
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"

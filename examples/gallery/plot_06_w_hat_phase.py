@@ -10,7 +10,7 @@ dissipation while Q̂1 < P̂1; otherwise the loss is largest near φ = ±π/2, a
 Ŵ(φ) = Ŵ(φ + π) (Q0 = 0). Gaps are phases at which the load path reaches gross slip.
 The second figure checks the small-amplitude law Ŵ ≈ (2/3) Q̂1³.
 
-Computed with :func:`slipcycle.halfspace.map_study.w_hat_map_study` (the engine of
+Computed with :func:`slipcycle.studies.w_hat_map.w_hat_map_study` (the engine of
 ``slipcycle map``) on a small grid: 4 × 37 points, 100 sliders.
 Run time: about 3 s (docs build on a busy 2-core machine).
 """
@@ -18,7 +18,7 @@ Run time: about 3 s (docs build on a busy 2-core machine).
 # %%
 import numpy as np
 
-from slipcycle.halfspace.map_study import w_hat_map_study
+from slipcycle.studies.w_hat_map import w_hat_map_study
 
 Q1_hat = np.array([0.2, 0.4, 0.6, 0.8])
 phase = np.linspace(-np.pi, np.pi, 37)

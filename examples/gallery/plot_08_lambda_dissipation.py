@@ -9,7 +9,7 @@ node stays stuck; above λ3 every node slips in every cycle and the steady state
 above λ4 the memory is erased at one instant of every cycle. slipcycle **computes** them:
 λ1 and λ2 by linear programs on the safe region S(λ), λ3 and λ4 as brackets from
 simulations over λ and random initial conditions, refined by bisection
-(:func:`slipcycle.discrete.shakedown_study.shakedown_study`, the engine of
+(:func:`slipcycle.studies.shakedown.shakedown_study`, the engine of
 ``slipcycle shakedown``).
 
 The triangle example (``shakedown_triangle``): λ1 = 0.946, λ2 = 1.104. The first figure
@@ -23,8 +23,8 @@ Run time: about 17 s (docs build on a busy 2-core machine).
 import tempfile
 
 import slipcycle
-from slipcycle.discrete.shakedown_study import shakedown_study
 from slipcycle.io import read_case
+from slipcycle.studies.shakedown import shakedown_study
 
 with tempfile.TemporaryDirectory() as work:              # scan store and checkpoint
     study = shakedown_study(read_case(slipcycle.example_path("shakedown_triangle")), work,

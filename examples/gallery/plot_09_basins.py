@@ -6,7 +6,7 @@ Between λ1 and λ2 the steady state of a coupled system depends on the initial 
 (Barber 2012, §3; Ahn, Bertocchi & Barber 2008) — physically on the assembly protocol,
 e.g. the order in which bolts are tightened. slipcycle maps it: a grid of initial slip
 states (v₀, v₁) at θ = 0, each run to its steady state
-(:func:`slipcycle.discrete.basins.basins_study`, the engine of ``slipcycle basins``).
+(:func:`slipcycle.studies.basins.basins_study`, the engine of ``slipcycle basins``).
 Left: the steady state reached from each start (grey: starts that violate a friction
 limit at θ = 0); right: the steady dissipation per cycle; outlined: the safe region S(λ).
 Starts inside S(λ) shake down, others end in cyclic slip of node 1 with a dissipation
@@ -23,8 +23,8 @@ Run time: about 8 s (docs build on a busy 2-core machine).
 import tempfile
 
 import slipcycle
-from slipcycle.discrete.basins import basins_study
 from slipcycle.io import read_case
+from slipcycle.studies.basins import basins_study
 
 with tempfile.TemporaryDirectory() as work:              # the store of the runs
     basins = basins_study(read_case(slipcycle.example_path("shakedown_triangle")), work,

@@ -25,8 +25,8 @@ Needs the ``topo`` extra. Run time: about 20–40 s (first run; the BEM laws are
 
 # %%
 import slipcycle
-from slipcycle.halfspace.roughness_study import parse_roughness_case, roughness_study
 from slipcycle.io import read_case
+from slipcycle.studies.roughness import parse_roughness_case, roughness_study
 
 case = read_case(slipcycle.example_path("halfspace_topography"), models=["halfspace"])
 # a coarser study than the shipped case: BEM grid 64, two grids and slider counts

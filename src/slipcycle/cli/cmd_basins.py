@@ -52,7 +52,7 @@ def execute(args: argparse.Namespace) -> int:
 
     case = read_case(args.case, models=["discrete", "discrete3d"])
     if case.model == "discrete3d":
-        from slipcycle.discrete3d.basins_study import basins3d_study
+        from slipcycle.studies.basins3d import basins3d_study
 
         status = basins3d_study(case, args.out, grid=args.grid, random=args.random,
                                 protocols=args.protocols, v1_range=args.v1,
@@ -60,7 +60,7 @@ def execute(args: argparse.Namespace) -> int:
                                 **study_options(args))
         return finish_study(status, args, case, ("starts", "class_counts", "attractors",
                                                  "both_outcomes"))
-    from slipcycle.discrete.basins import basins_study
+    from slipcycle.studies.basins import basins_study
 
     status = basins_study(case, args.out, grid=args.grid, random=args.random,
                           protocols=args.protocols, v1_range=args.v1, v2_range=args.v2,

@@ -28,8 +28,8 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from slipcycle.halfspace.map_study import parse_map_case, w_hat_map_study
     from slipcycle.io import read_case, write_outputs
+    from slipcycle.studies.w_hat_map import parse_map_case, w_hat_map_study
 
     case = read_case(args.case, models=["halfspace"])
     P1, Q1, ph, fig_P1, fig_Q1, settings = parse_map_case(case)

@@ -33,8 +33,8 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from slipcycle.halfspace.roughness_study import parse_roughness_case, roughness_study
     from slipcycle.io import read_case, write_outputs
+    from slipcycle.studies.roughness import parse_roughness_case, roughness_study
 
     case = read_case(args.case, models=["halfspace"])
     with StageBar(progress_enabled(args), "roughness: BEM and slider beds") as bar:

@@ -46,8 +46,8 @@ def add_parser(sub) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from slipcycle.discrete.shakedown_study import shakedown_study
     from slipcycle.io import read_case
+    from slipcycle.studies.shakedown import shakedown_study
 
     case = read_case(args.case, models=["discrete"])
     status = shakedown_study(case, args.out, lam_max=args.lam_max, lam_points=args.lam_points,

@@ -39,7 +39,7 @@ def add_parser(sub) -> None:
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.io import read_case, write_outputs
     from slipcycle.registry import RUN_MODELS
-    from slipcycle.sweep.case import run_case_sweep
+    from slipcycle.studies.case_sweep import run_case_sweep
 
     case = read_case(args.case, models=list(RUN_MODELS))
     status = run_case_sweep(

@@ -10,7 +10,6 @@ Barber 2007 for shakedown; Alart & Curnier 1991 for the incremental solver).
 - :mod:`~slipcycle.discrete3d.steady`     cycling to the steady state, classes
 - :mod:`~slipcycle.discrete3d.shakedown`  λ2 by a second-order cone program (Clarabel)
 - :mod:`~slipcycle.discrete3d.basins`     steady states from many starts / protocols
-- :mod:`~slipcycle.discrete3d.basins_study`  ``slipcycle basins`` of a case (sweep store)
 - :mod:`~slipcycle.discrete3d.fields`     XDMF / VTU fields for ParaView
 - :mod:`~slipcycle.discrete3d.case`       ``model = "discrete3d"`` cases and results
 """

@@ -6,8 +6,8 @@ approach at which they touch); :func:`~slipcycle.halfspace.history.run_history` 
 bed along a load path; :mod:`~slipcycle.halfspace.tractions` turns slider line loads into
 traction and dissipation distributions for axisymmetric profiles; :mod:`~.wmap` computes
 the dimensionless rough-surface dissipation Ŵ(P̂1, Q̂1, φ); :mod:`~.topography` turns
-measured topography into P(U) by a boundary-element solver and :mod:`~.roughness_study`
-asks which of its wavelengths matter.
+measured topography into P(U) by a boundary-element solver (the studies that use them,
+the Ŵ map and the roughness study, are in :mod:`slipcycle.studies`).
 """
 
 import importlib

@@ -2,7 +2,9 @@
 
 - :mod:`~slipcycle.sweep.core`  Cartesian grids, Zarr store (one cell per run), resume,
   local process pool / Dask cluster, progress bar
-- :mod:`~slipcycle.sweep.case`  sweeps over the keys of a case file (``slipcycle sweep``)
+
+The engine knows no model: the sweeps over the keys of a case file (``slipcycle sweep``)
+are :mod:`slipcycle.studies.case_sweep`.
 """
 
 from slipcycle.sweep.core import Axis, CellOutputs, SweepError, SweepStore, run_sweep

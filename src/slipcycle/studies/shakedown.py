@@ -29,12 +29,7 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
-from slipcycle.discrete.basins import (
-    AnalysisStatus,
-    lam_start_task,
-    load_discrete_case,
-    run_record,
-)
+from slipcycle.discrete.basins import run_record
 from slipcycle.discrete.shakedown import (
     constraint_names,
     lambda1,
@@ -50,6 +45,7 @@ from slipcycle.discrete.steady import STEADY_CODES, simulate
 from slipcycle.io import Case, CaseError
 from slipcycle.plot import shakedown as plots
 from slipcycle.result import StudyResult
+from slipcycle.studies.basins import AnalysisStatus, lam_start_task, load_discrete_case
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.core import TaskRunner, fingerprint
 from slipcycle.sweep.dataset import as_case_error

@@ -75,7 +75,7 @@ def parse_map_case(case):
     Parameters
     ----------
     case : Case
-        ``model = "halfspace"`` with a ``[map]`` table (see :mod:`slipcycle.halfspace.map_study`).
+        ``model = "halfspace"`` with a ``[map]`` table (see :mod:`slipcycle.studies.w_hat_map`).
 
     Returns
     -------
