@@ -140,3 +140,67 @@ def test_sphere_dissipation_density_curve_ends_at_zero_on_the_contact_edge(propo
     # the curve drawn carries the dissipation: ∫ W 2πr dr = ∮ Q dV (energy balance)
     D = float(ds.dissipation.values[-1])
     assert np.trapezoid(W * 2 * np.pi * r, r) == pytest.approx(D, rel=0.01)
+
+
+# -- discrete two-node example ----------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def two_node():
+    """The demo's two-node case: it shakes down, both nodes stuck in the last cycle, whose
+    dissipation is the last creep of the approach (4.35e-9 J in the demo)."""
+    return slipcycle.run(example_text("discrete_two_node"))
+
+
+def test_two_node_hysteresis_titles_carry_each_nodes_dissipation_and_add_up_to_the_summary(
+        two_node):
+    import re
+
+    from slipcycle.plot.discrete import hysteresis, scaled_unit
+
+    ds = two_node.to_dataset()
+    summary = two_node.summary()
+    assert summary["permanently_stuck_nodes"] == [0, 1]
+    D = np.asarray(ds["dissipation_per_node"])
+    assert D.sum() == pytest.approx(summary["dissipation_per_cycle"], rel=1e-12)
+    fig = hysteresis(ds)
+    factor, unit = scaled_unit(D, "J")
+    for j, ax in enumerate(fig.axes[:2]):
+        value = re.search(r"D = ([-0-9.e+]+) (\S+)$", ax.get_title())
+        assert value is not None and "≈" not in ax.get_title(), ax.get_title()
+        assert value[2] == unit
+        assert float(value[1]) * factor == pytest.approx(D[j], rel=5e-3)
+        # stuck: no frame, no empty axes, the reason written instead of a loop
+        assert not ax.axison and ax.get_lines() == []
+        assert any("stuck" in t.get_text() and "tolerance" in t.get_text() for t in ax.texts)
+    total = re.search(r"D = ([-0-9.e+]+) (\S+) in all", fig._suptitle.get_text())
+    assert float(total[1]) * factor == pytest.approx(summary["dissipation_per_cycle"],
+                                                     rel=5e-3)
+
+
+def test_two_node_v_space_legend_names_only_constraint_lines_inside_a_panel(two_node):
+    import re
+
+    fig = two_node.to_outputs().figures["v_space"]()
+    main = fig.axes[0]
+    legend_texts = _legend_texts(main)
+    named = [t for t in legend_texts if t.endswith(", extreme")]
+    assert named, legend_texts
+    for name in named:
+        (line,) = [ln for ln in main.get_lines() if ln.get_label() == name]
+        x, y = (np.asarray(d, float) for d in line.get_data())
+        # the drawn line (a segment over the x range, or vertical) meets a panel's box
+        seen = False
+        for ax in fig.axes:
+            (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+            xs = np.linspace(max(x.min(), x0), min(x.max(), x1), 200)
+            if xs.size and x.max() > x.min():
+                ys = np.interp(xs, x, y)
+                seen |= bool(np.any((ys >= y0) & (ys <= y1)))
+            else:
+                seen |= bool(x0 <= x[0] <= x1)
+        assert seen, f"{name} is in the legend but in neither panel"
+    outside = {"I", "II", "III", "IV"} - {t.split()[0] for t in named}
+    title = main.get_legend().get_title().get_text()
+    for roman in outside:   # every constraint not drawn is still named, as out of view
+        assert re.search(rf"(: |; ){roman} \(node", title), title

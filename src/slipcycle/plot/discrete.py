@@ -116,11 +116,14 @@ def slip_and_tractions(ds) -> Figure:
 
 
 def hysteresis(ds) -> Figure:
-    """q–v loop of each node over the last cycle; the title gives D_j.
+    """q–v loop of each node over the last cycle; each title gives D_j, the figure's the sum.
 
-    A node stuck over the whole last cycle (:func:`stuck_nodes`) has no loop: its
-    "loop" would be round-off (slip ranges of 1e-14 m, D of 1e-11 J). Its panel says it is
-    stuck and gives the slip range against the tolerance instead of drawing it.
+    A node stuck over the whole last cycle (:func:`stuck_nodes`) has no loop to draw: its
+    slip range is below the run's tolerance (round-off, or the last creep of an approach
+    to shakedown). Its panel has no axes: it says the node is stuck and gives the slip
+    range against the tolerance, and its title the dissipation D_j the run computed for it
+    (the summary's ``dissipation_per_node``), so the titles add up to the figure's total,
+    the summary's ``dissipation_per_cycle``.
     """
     last = ds.isel(cycle=-1)
     nodes = _nodes_to_show(ds)
@@ -129,24 +132,22 @@ def hysteresis(ds) -> Figure:
     k = len(nodes)
     cols = min(k, 4)
     rows = int(np.ceil(k / cols))
-    fig = Figure(figsize=(3.2 * cols, 2.9 * rows))
+    fig = Figure(figsize=(3.2 * cols, 2.9 * rows + 0.4))
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
     D = np.asarray(ds["dissipation_per_node"])
-    moving = [j for j in nodes if not stuck[j]]
-    fd, ud = scaled_unit(D[moving] if moving else D, "J")
+    fd, ud = scaled_unit(D, "J")
     for ax, j in zip(axes, nodes, strict=False):
         v = last["slip"].values[:, j]
         q = last["tangential_reaction"].values[:, j]
         if stuck[j]:
             rng = float(np.ptp(v))
             fr, ur = scaled_unit([rng, tol] if np.isfinite(tol) else [rng], "m")
-            lim = (f"\n< tolerance {tol / fr:.3g} {ur}" if np.isfinite(tol) else "")
+            lim = (f" < tolerance {tol / fr:.3g} {ur}" if np.isfinite(tol) else "")
             ax.text(0.5, 0.5, f"permanently stuck\nslip range {rng / fr:.3g} {ur}{lim}\n"
-                    "(below the tolerance: not drawn)", ha="center", va="center", fontsize=8,
-                    transform=ax.transAxes)
-            ax.set_xticks([])
-            ax.set_yticks([])
-            ax.set_title(f"node {j}: stuck, D ≈ 0", fontsize=8)
+                    "(within the tolerance: no loop drawn)", ha="center", va="center",
+                    fontsize=8, transform=ax.transAxes)
+            ax.set_axis_off()
+            ax.set_title(f"node {j}: stuck, D = {D[j] / fd:.3g} {ud}", fontsize=8)
             continue
         fv, uv = scaled_unit(v, "m")
         fq, uq = scaled_unit(q, "N")
@@ -158,6 +159,9 @@ def hysteresis(ds) -> Figure:
         _plain(ax)
     for ax in axes[k:]:
         ax.set_visible(False)
+    total = float(np.sum(D))
+    shown = "" if k == D.size else f", {k} of {D.size} nodes shown"
+    fig.suptitle(f"last cycle: D = {total / fd:.3g} {ud} in all{shown}", fontsize=9)
     fig.tight_layout()
     return fig
 
@@ -173,12 +177,20 @@ def constraint_labels() -> dict[int, str]:
             3: "III (node 1, q=+fp)"}
 
 
+def _crosses_view(g: np.ndarray, h: float, lo: np.ndarray, hi: np.ndarray) -> bool:
+    """Whether the line {v : g·v = h} passes through the box [lo, hi] (2-D)."""
+    corners = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]])
+    s = corners @ np.asarray(g, float) - h
+    return bool(s.min() <= 0.0 <= s.max())
+
+
 def _draw_lines(ax, G, h, lo, hi, labels=None):
+    """Draw the constraint lines; ``labels[k]`` (None: unlabelled) names line k."""
     xs = np.linspace(lo[0], hi[0], 2)
     colors = [f"C{k}" for k in range(4)]
     for k in range(G.shape[0]):
         g = G[k]
-        lab = None if labels is None else labels[k] + ", extreme"
+        lab = None if labels is None or labels.get(k) is None else labels[k] + ", extreme"
         if abs(g[1]) > 1e-12 * np.abs(g).max():
             ax.plot(xs, (h[k] - g[0] * xs) / g[1], lw=1, color=colors[k], label=lab)
         else:
@@ -228,7 +240,12 @@ def v_space(result, G: np.ndarray, h: np.ndarray, verts: np.ndarray) -> Figure:
     else:
         fig = Figure(figsize=(11.5, 5.4))
         ax, axz = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.15, 1]})
-    labels = constraint_labels()
+    # the legend names only the lines that cross a panel; the others are said to lie
+    # outside the view (a legend entry for a line that is nowhere drawn misleads)
+    views = [(lo, hi)] + ([zoom] if zoom is not None else [])
+    labels = {k: lab for k, lab in constraint_labels().items()
+              if any(_crosses_view(G[k], h[k], a, b) for a, b in views)}
+    outside = [lab for k, lab in constraint_labels().items() if k not in labels]
 
     def draw(axx, lo_, hi_, legend):
         if len(verts) >= 3:
@@ -247,7 +264,9 @@ def v_space(result, G: np.ndarray, h: np.ndarray, verts: np.ndarray) -> Figure:
     ax.set_xlabel(f"v₀ (node 0) [{unit}]")
     ax.set_ylabel(f"v₁ (node 1) [{unit}]")
     ax.set_title(f"v-space: {result.steady_state} (shaded: safe shakedown region)", fontsize=10)
-    ax.legend(fontsize=7, loc="best")
+    legend = ax.legend(fontsize=7, loc="best")
+    if outside:
+        legend.set_title("outside the view: " + "; ".join(outside), prop={"size": 7})
     if zoom is not None:
         draw(axz, zoom[0], zoom[1], False)
         axz.set_xlabel(f"v₀ (node 0) [{unit}]")
