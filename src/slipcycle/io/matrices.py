@@ -37,11 +37,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.io import mmread
+from scipy.io import mminfo, mmread
 
 from slipcycle.io.case import CaseError, Section
 from slipcycle.io.fe_formats import FORMATS, detect_format, read_raw
-from slipcycle.io.fe_formats.common import RawMatrix, StiffnessError, file_error
+from slipcycle.io.fe_formats.common import (
+    RawMatrix,
+    StiffnessError,
+    check_diagonal,
+    file_error,
+)
 from slipcycle.io.fe_formats.dofmap import (
     ORDERINGS,
     DofMap,
@@ -213,6 +218,10 @@ def stiffness_nodes(path: str | Path) -> int | None:
     file is read. ``None`` when the headers cannot tell (the reader then reports why).
     """
     path = Path(path)
+    try:
+        _check_file(path)                           # never a device, FIFO or huge file
+    except StiffnessError:
+        return None                                 # the reader says why
     try:
         if path.suffix.lower() == ".mtx":
             from scipy.io import mminfo
@@ -464,6 +473,25 @@ def _raw_npz(path: Path, keys: dict | None) -> RawMatrix:
     raise file_error(path, f"lacks array(s) {', '.join(missing)} (or a full {names['K']})")
 
 
+def _check_mm_header(path: Path) -> None:
+    """Refuse a Matrix Market file whose header declares no real symmetric-able matrix:
+    ``complex`` (NumPy would drop the imaginary part with a warning), ``pattern`` (no
+    values), ``skew-symmetric`` or ``hermitian`` (not a stiffness)."""
+    try:
+        rows, cols, _, _, fld, symm = mminfo(str(path))
+    except (ValueError, OSError, IndexError, TypeError) as exc:
+        raise file_error(path, f"not a readable Matrix Market file: {exc}") from None
+    if fld == "complex":
+        raise file_error(path, "is a complex Matrix Market matrix (field 'complex'); a "
+                         "stiffness is real")
+    if fld == "pattern":
+        raise file_error(path, "is a pattern Matrix Market matrix: it holds no values")
+    if symm in ("skew-symmetric", "hermitian"):
+        raise file_error(path, f"is declared {symm}; a stiffness is symmetric")
+    if rows != cols:
+        raise file_error(path, f"K is {rows}×{cols}, not square")
+
+
 def _raw_mtx(path: Path) -> RawMatrix:
     """A Matrix Market file: the full K; ``% dof_order:`` / ``% tangential_dims:`` comments."""
     stated = {}
@@ -480,6 +508,7 @@ def _raw_mtx(path: Path) -> RawMatrix:
             stated["tangential_dims"] = int(stated["tangential_dims"])
         except ValueError:
             raise file_error(path, "the comment '% tangential_dims:' must be 1 or 2") from None
+    _check_mm_header(path)
     try:
         K = mmread(str(path))
     except (ValueError, OSError, IndexError, TypeError) as exc:
@@ -618,8 +647,7 @@ def read_reduced_stiffness(path, *, format: str | None = None,  # noqa: A002 (th
     """
     path = Path(path)
     where = path.name
-    if not path.is_file():
-        raise file_error(path, "file not found" if not path.exists() else "is not a file")
+    _check_file(path)
     fmt = format or detect_format(path)
     if fmt not in FORMATS:
         raise StiffnessError("format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
@@ -641,6 +669,8 @@ def read_reduced_stiffness(path, *, format: str | None = None,  # noqa: A002 (th
             fields["normals"], fields["tangents"] = node_frames(
                 frames, fields["C"].shape[0], fields["tangential_dims"])
         return _construct(where, **fields, nodes=None, source=source)
+    check_diagonal(raw.K, raw.labels if raw.transform is None else None, where)
+    _check_labelled(raw, where, dof_map, retained is not None or contact_nodes is not None)
     dmap = _dof_map(raw, dof_map, tangential_dims, where)
     if retained is not None:
         dmap = dmap.with_retained(retained, where)
@@ -655,6 +685,33 @@ def read_reduced_stiffness(path, *, format: str | None = None,  # noqa: A002 (th
     return _construct(where, A=red["A"], B=red["B"], C=red["C"], tangential_dims=red["t"],
                       nodes=red["nodes"], coordinates=coords, normals=red["normals"],
                       tangents=red["tangents"], loads=red["loads"], source=source)
+
+
+def _check_file(path: Path) -> None:
+    """Refuse, before reading it, a path that is no regular file of a sane size (a device
+    such as ``/dev/zero`` or a FIFO would be read forever, a 10 GB file would exhaust the
+    memory budget): :func:`slipcycle.io.files.check_input_file`, naming the file."""
+    from slipcycle.io.files import check_input_file
+
+    try:
+        check_input_file(path, str(path), what="stiffness file")
+    except CaseError as exc:                        # named in full: "/dev/zero", not "zero"
+        raise StiffnessError(str(path), exc.problem) from None
+
+
+def _check_labelled(raw: RawMatrix, where: str, dof_map, by_node: bool) -> None:
+    """Refuse an export whose labelling file is missing when its rows must be matched to
+    nodes (no dof map given, or retained / contact nodes named)."""
+    if raw.labels is not None or raw.missing_labels is None:
+        return
+    table = dof_map is not None and not (isinstance(dof_map, str) and dof_map in ORDERINGS)
+    if table or (dof_map is not None and not by_node):
+        return
+    writer = ("CalculiX writes it beside the .sti" if raw.missing_labels.endswith(".dof")
+              else "ANSYS HBMAT writes it with Mapping = YES")
+    raise file_error(where, f"{raw.missing_labels} is missing beside it: that file gives "
+                     f"the node and dof of each row ({writer}); without it the rows cannot "
+                     "be matched to nodes (or give a dof_map table)")
 
 
 def _construct(where: str, **fields) -> ReducedStiffness:
@@ -732,7 +789,8 @@ def read_case_stiffness(sec: Section, path: Path, tangential_dims: int) -> Reduc
         return read_reduced_stiffness(path, tangential_dims=tangential_dims, **opts)
     except StiffnessError as exc:
         sub = _CASE_KEYS.get(exc.key) or ("keys" if exc.key.startswith("keys") else None)
-        if sub is None or sub == "stiffness_file" or exc.key == path.name:
-            problem = exc.problem if exc.key == path.name else f"{exc.key}: {exc.problem}"
+        if sub is None or sub == "stiffness_file" or exc.key in (path.name, str(path)):
+            problem = (exc.problem if exc.key in (path.name, str(path))
+                       else f"{exc.key}: {exc.problem}")
             raise CaseError(sec.key("stiffness_file"), f"{path.name}: {problem}") from None
         raise CaseError(sec.key(f"stiffness.{sub}"), exc.problem) from None

@@ -33,7 +33,12 @@ from pathlib import Path
 
 import numpy as np
 
-from slipcycle.io.fe_formats.common import RawMatrix, file_error, from_triplets
+from slipcycle.io.fe_formats.common import (
+    RawMatrix,
+    check_last_node,
+    file_error,
+    from_triplets,
+)
 
 __all__ = ["read"]
 
@@ -94,6 +99,12 @@ def read(path: Path, fmt: str = "abaqus", *, check_condensed: bool = True) -> Ra
         return _matrix_input(data, path, fmt)
     if widths == {3}:
         return _coordinate(data, path, fmt)
+    if widths == {3, 5}:                            # a 5-field file cut inside its last line
+        n5 = sum(len(f) == 5 for _, f in data)
+        odd = 3 if n5 * 2 > len(data) else 5
+        lineno = next(i for i, f in data if len(f) == odd)
+        raise file_error(path, f"line {lineno}: {odd} fields where the other lines have "
+                         f"{8 - odd} (file truncated?)")
     lineno, f = next((i, f) for i, f in data if len(f) not in (3, 5))
     raise file_error(path, f"line {lineno}: expected 'node, dof, node, dof, value' or "
                      f"'row, column, value', got {len(f)} fields")
@@ -160,6 +171,7 @@ def _matrix_input(data, path: Path, fmt: str, arr=None) -> RawMatrix:
     inv = inv.ravel()
     rows, cols = inv[:len(ent)], inv[len(ent):]
     index = {(int(a), int(b)): k for k, (a, b) in enumerate(keys)}
+    check_last_node(keys, int(ent[-1, 0]), path)
     K = from_triplets(rows, cols, vals, len(keys), path)
     loads = _abaqus_load(path, index, len(keys))
     return RawMatrix(K, labels=keys, loads=loads, format=fmt)
@@ -205,7 +217,8 @@ def _dof_file(path: Path, n: int):
         # written as a real number: trailing zeros of "12.300" are padding (dofs 0-6)
         labels.append((_int(node, dof, i + 1), _int(d.rstrip("0") or "0", dof, i + 1)))
     if len(labels) != n:
-        raise file_error(path, f"K has {n} rows but {dof.name} lists {len(labels)} dofs")
+        raise file_error(path, f"K has {n} rows but {dof.name} lists {len(labels)} dofs "
+                         "(one of the two is truncated, or they are of different runs)")
     return np.array(labels, np.int64)
 
 
@@ -223,7 +236,11 @@ def _coordinate(data, path: Path, fmt: str, arr=None) -> RawMatrix:
     n = int(max(rows.max(), cols.max())) + 1
     labels = _dof_file(path, n)
     K = from_triplets(rows, cols, vals, n, path)
-    return RawMatrix(K, labels=labels, format=fmt)
+    # CalculiX always writes jobname.dof beside jobname.sti; Abaqus's COORDINATE has none
+    calculix = fmt == "calculix" or path.suffix.lower() == ".sti"
+    return RawMatrix(K, labels=labels, format=fmt,
+                     missing_labels=path.with_suffix(".dof").name
+                     if labels is None and calculix else None)
 
 
 def _user_element(text: str, path: Path, fmt: str) -> RawMatrix:

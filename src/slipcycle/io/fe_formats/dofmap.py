@@ -72,6 +72,15 @@ _LOCAL = ("t1", "t2", "n")
 _GLOBAL = ("x", "y", "z")
 
 
+def _node_list(node) -> str:
+    """The nodes of a map in a few words: "its nodes: 1, 2, 22" or "its 40 nodes: 1, 2,
+    3, ..., 40" (for the message of a node that is not among them)."""
+    u = np.unique(np.asarray(node))
+    if u.size <= 6:
+        return "its nodes: " + ", ".join(map(str, u))
+    return f"its {u.size} nodes: {', '.join(map(str, u[:3]))}, ..., {u[-1]}"
+
+
 @dataclass(frozen=True)
 class DofMap:
     """Node and role of every row of an exported K.
@@ -100,7 +109,8 @@ class DofMap:
         nodes = np.atleast_1d(np.asarray(nodes, np.int64))
         missing = sorted(set(nodes.tolist()) - set(self.node.tolist()))
         if missing:
-            raise StiffnessError("retained", f"node {missing[0]} is not a node of {where}")
+            raise StiffnessError("retained", f"node {missing[0]} is not a node of {where}"
+                                 f" ({_node_list(self.node)})")
         mask = np.isin(self.node, nodes)
         return DofMap(self.node, tuple("retained" if m else r
                                        for m, r in zip(mask, self.role, strict=True)))
@@ -110,7 +120,8 @@ class DofMap:
         nodes = np.atleast_1d(np.asarray(nodes, np.int64))
         missing = sorted(set(nodes.tolist()) - set(self.node.tolist()))
         if missing:
-            raise StiffnessError("contact_nodes", f"node {missing[0]} is not a node of {where}")
+            raise StiffnessError("contact_nodes", f"node {missing[0]} is not a node of {where}"
+                                 f" ({_node_list(self.node)})")
         return self.with_retained(np.setdiff1d(np.unique(self.node), nodes), where)
 
 

@@ -124,13 +124,17 @@ def read(path: Path) -> RawMatrix:
     if ind.min() < 1 or ind.max() > nrow:
         raise file_error(path, "a row index lies outside the matrix")
     cols = np.repeat(np.arange(ncol), np.diff(ptr))
-    K = from_triplets(ind - 1, cols, val, nrow, path)   # RSA: the lower triangle, mirrored
+    # RSA: the lower triangle, mirrored; RUA stores every entry
+    K = from_triplets(ind - 1, cols, val, nrow, path,
+                      storage="triangle" if mxtype[1] == "S" else "full", declared=mxtype)
     loads = {}
     if nrhs and rhstyp.startswith("F"):
         rhs = _section(lines, pos, rhscrd, _width(rhsfmt, path, "right-hand side"),
                        nrhs * nrow, _real, path, "right-hand sides").reshape(nrhs, nrow)
         loads = {("RHS" if nrhs == 1 else f"RHS{k + 1}"): rhs[k] for k in range(nrhs)}
-    return RawMatrix(K, labels=_mapping(path, nrow), loads=loads, format="harwell-boeing")
+    labels = _mapping(path, nrow)
+    return RawMatrix(K, labels=labels, loads=loads, format="harwell-boeing",
+                     missing_labels=None if labels is not None else f"{path.stem}.mapping")
 
 
 def _mapping(path: Path, n: int):

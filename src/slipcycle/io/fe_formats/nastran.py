@@ -22,7 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from slipcycle.io.fe_formats.common import RawMatrix, StiffnessError, file_error, from_triplets
+from slipcycle.io.fe_formats.common import (
+    RawMatrix,
+    StiffnessError,
+    check_last_node,
+    file_error,
+    from_triplets,
+)
 
 __all__ = ["read"]
 
@@ -82,7 +88,8 @@ def read(path: Path, keys: dict | None = None) -> RawMatrix:
         model.read_bdf(str(path), punch=punch, xref=False, validate=False)
     except Exception as exc:  # noqa: BLE001 - pyNastran raises many kinds; say it in one line
         msg = str(exc).strip().splitlines()
-        raise file_error(path, "cannot read the Nastran DMIG cards: "
+        raise file_error(path, "cannot read the Nastran DMIG cards, a card is cut short "
+                         "or malformed (file truncated?): "
                          f"{type(exc).__name__}: {msg[0] if msg else ''}") from None
     if not model.dmig:
         raise file_error(path, "holds no DMIG matrix")
@@ -100,7 +107,14 @@ def read(path: Path, keys: dict | None = None) -> RawMatrix:
     index = {lab: k for k, lab in enumerate(labels)}
     rows = [index[rl[i]] for i in r]
     cols = [index[cl[j]] for j in c]
-    K = from_triplets(rows, cols, v, len(labels), path)
+    dmig = model.dmig[name]
+    gcj = np.asarray(getattr(dmig, "GCj", []), np.int64).reshape(-1, 2)
+    if gcj.size:
+        check_last_node(np.array(labels, np.int64), int(gcj[-1, 0]), path)
+    # IFO 1 (square) stores every entry: a lone triangle there is half a matrix
+    ifo = getattr(dmig, "matrix_form", None)
+    K = from_triplets(rows, cols, v, len(labels), path,
+                      storage="full" if ifo == 1 else "either", declared=f"IFO = {ifo}")
     loads = {}
     lname = keys.get("loads", "PAX" if "PAX" in model.dmig else None)
     if lname is not None:

@@ -1,0 +1,202 @@
+"""Damaged or misdeclared FE exports are refused for what they are (issue 34).
+
+Each file of the corpus is one of the shipped exports (tests/data/fe_exports, the two-node
+example with retained nodes 21, 22) cut short, missing its labelling file, complex, holding
+one triangle where its header declares a full matrix, or not a regular file at all. Every
+one must end as one line naming the file and the real problem, exit code 2, no traceback,
+no NumPy warning and nothing written: through the Python API, ``slipcycle run`` of a case
+naming the file, and ``slipcycle reduce``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import warnings
+from pathlib import Path
+
+import pytest
+
+from slipcycle.io.matrices import StiffnessError, read_reduced_stiffness
+
+DATA = Path(__file__).resolve().parent / "data" / "fe_exports"
+EXAMPLE = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples" / \
+    "discrete_two_node.toml"
+KWARGS = json.loads((DATA / "README.json").read_text())["files"]
+
+
+def _lines(name: str) -> list[str]:
+    return (DATA / name).read_text().splitlines(keepends=True)
+
+
+def _abaqus(d: Path, keep) -> tuple[Path, str]:
+    path = d / "example_STIF2.mtx"
+    path.write_text("".join(keep(_lines("example_STIF2.mtx"))))
+    return path, "example_STIF2.mtx"
+
+
+def _dmig(d: Path, keep) -> tuple[Path, str]:
+    path = d / "example.pch"
+    path.write_text("".join(keep(_lines("example.pch"))))
+    return path, "example.pch"
+
+
+def _sti_without_dof(d: Path):
+    shutil.copy(DATA / "example.sti", d / "example.sti")
+    return d / "example.sti", "example.sti"
+
+
+def _hb_without_mapping(d: Path):
+    shutil.copy(DATA / "example.matrix", d / "example.matrix")
+    return d / "example.matrix", "example.matrix"
+
+
+def _hb_rua_triangle(d: Path):
+    lines = _lines("example.matrix")
+    lines[2] = "RUA" + lines[2][3:]                 # the same lower triangle, declared full
+    (d / "example.matrix").write_text("".join(lines))
+    shutil.copy(DATA / "example.mapping", d / "example.mapping")
+    return d / "example.matrix", "example.matrix"
+
+
+def _dmig_ifo1_triangle(d: Path):
+    def square(lines):
+        h = lines[1]                                # DMIG* KAAX 0 6 2: IFO 6 -> 1 (square)
+        lines[1] = h[:40] + h[40:56].replace("6", "1") + h[56:]
+        return lines
+    return _dmig(d, square)
+
+
+def _complex_matrix_market(d: Path):
+    path = d / "k.mtx"
+    path.write_text("%%MatrixMarket matrix coordinate complex symmetric\n4 4 4\n"
+                    + "".join(f"{i} {i} 2.0 0.5\n" for i in range(1, 5)))
+    return path, "k.mtx"
+
+
+def _fifo(d: Path):
+    path = d / "k.mtx"
+    os.mkfifo(path)
+    return path, "k.mtx"
+
+
+def _ten_gigabytes(d: Path):
+    path = d / "example_STIF2.mtx"
+    with open(path, "wb") as fh:                    # sparse: no disk used
+        fh.truncate(10 * 1024 ** 3)
+    return path, "example_STIF2.mtx"
+
+
+def _is_row(node_dof: str):
+    return lambda ln: ln.startswith(node_dof)
+
+
+#: id -> (writer(d) -> (path, README entry), words the one line must hold)
+CORPUS = {
+    "abaqus_cut_inside_a_row": (lambda d: _abaqus(d, lambda ls: ls[:-1]),
+                                ["no diagonal entry", "node 22 dof 2", "truncated"]),
+    "abaqus_cut_at_a_row_end": (
+        lambda d: _abaqus(d, lambda ls: [ln for ln in ls if not _is_row("22,2,")(ln)]),
+        ["last node 22 has dof(s) 1 only", "truncated"]),
+    "abaqus_cut_inside_a_line": (
+        lambda d: _abaqus(d, lambda ls: ls[:-1] + ["22,2, 22,"]),
+        ["3 fields where the other lines have 5", "truncated"]),
+    "sti_without_its_dof_file": (_sti_without_dof, ["example.dof is missing"]),
+    "hbmat_without_its_mapping": (_hb_without_mapping, ["example.mapping is missing"]),
+    "dmig_cut_inside_a_column": (lambda d: _dmig(d, lambda ls: ls[:-1]),
+                                 ["no diagonal entry", "node 22 dof 2", "truncated"]),
+    "dmig_cut_at_a_column_end": (lambda d: _dmig(d, lambda ls: ls[:-9]),
+                                 ["last node 22 has dof(s) 1 only", "truncated"]),
+    "dmig_cut_inside_a_card": (lambda d: _dmig(d, lambda ls: ls[:-1] + [ls[-1][:20]]),
+                               ["truncated"]),
+    "complex_matrix_market": (_complex_matrix_market, ["complex", "a stiffness is real"]),
+    "hb_declared_rua_holding_a_triangle": (_hb_rua_triangle,
+                                           ["declared RUA", "one triangle only"]),
+    "dmig_ifo_1_holding_a_triangle": (_dmig_ifo1_triangle,
+                                      ["declared IFO = 1", "one triangle only"]),
+    "a_fifo": (_fifo, ["FIFO"]),
+    "a_10_gb_file": (_ten_gigabytes, ["10.7 GB", "larger than"]),
+}
+
+
+def _kwargs(entry: str) -> dict:
+    kw = dict(KWARGS.get(entry, {"frames": {"normal": [0, -1]}}))
+    kw.pop("format", None) if entry != "example.matrix" else None
+    return kw
+
+
+@pytest.mark.parametrize("case", sorted(CORPUS))
+def test_python_api_refuses_in_one_line_naming_the_file_without_warnings(case, tmp_path):
+    write, words = CORPUS[case]
+    path, entry = write(tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")              # no NumPy ComplexWarning or the like
+        with pytest.raises(StiffnessError) as err:
+            read_reduced_stiffness(path, tangential_dims=1, **_kwargs(entry))
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith((path.name, str(path))), msg
+    for w in words:
+        assert w in msg, msg
+
+
+def test_dev_zero_is_refused_before_it_is_read():
+    with pytest.raises(StiffnessError, match=r"^/dev/zero: is a character device"):
+        read_reduced_stiffness("/dev/zero", format="matrix-market")
+
+
+def _case_lines(path: Path, entry: str) -> str:
+    kw = _kwargs(entry)
+    lines = [f'stiffness_file = "{path}"', "stiffness.normal = [0, -1]"]
+    if "retained" in kw:
+        lines.append(f"stiffness.retained = {kw['retained']}")
+    if entry == "example.matrix":
+        lines.append('stiffness.format = "harwell-boeing"')
+    return "\n".join(lines) + "\n"
+
+
+def _one_line(code, out, err, *words) -> str:
+    assert code == 2, (out, err)
+    lines = [ln for ln in err.strip().splitlines() if ln.strip()]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    for w in words:
+        assert w in lines[0], lines[0]
+    return lines[0]
+
+
+@pytest.mark.parametrize("case", sorted(CORPUS) + ["dev_zero"])
+def test_run_of_a_case_naming_the_file_exits_2_in_one_line_writing_nothing(case, run_cli,
+                                                                           tmp_path):
+    files = tmp_path / "files"
+    files.mkdir()
+    if case == "dev_zero":
+        path, entry, words = Path("/dev/zero"), "", ["character device"]
+    else:
+        write, words = CORPUS[case]
+        path, entry = write(files)
+    text = EXAMPLE.read_text()
+    text = text[:text.index("A = [[")] + _case_lines(path, entry) + text[text.index("friction"):]
+    case_file = tmp_path / "case.toml"
+    case_file.write_text(text)
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    code, out, err = run_cli("run", case_file, "--out", tmp_path / "out")
+    line = _one_line(code, out, err, "discrete.stiffness_file", *words)
+    assert path.name in line
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+
+
+#: files ``slipcycle reduce FILE`` takes without a case (Abaqus, Matrix Market, any path)
+REDUCE = [c for c in sorted(CORPUS) if c.startswith(("abaqus", "complex", "a_"))]
+
+
+@pytest.mark.parametrize("case", REDUCE)
+def test_reduce_of_the_file_exits_2_in_one_line_writing_nothing(case, run_cli, tmp_path):
+    files = tmp_path / "files"
+    files.mkdir()
+    write, words = CORPUS[case]
+    path, _ = write(files)
+    out = tmp_path / "reduced.npz"
+    code, stdout, err = run_cli("reduce", path, "--out", out)
+    line = _one_line(code, stdout, err, *words)
+    assert path.name in line
+    assert not out.exists()
