@@ -21,11 +21,11 @@ import time
 
 
 def _case():
-    import slipcycle.rods.limits as limits
     from slipcycle.examples import example_path
     from slipcycle.io.case import read_case
+    from slipcycle.studies.limits import parse_limits
 
-    return limits.parse_limits(read_case(example_path("rods_limits_equal")), 0.05)
+    return parse_limits(read_case(example_path("rods_limits_equal")), 0.05)
 
 
 def _map(lc, ratios, factors, method="newton"):

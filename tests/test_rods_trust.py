@@ -103,7 +103,8 @@ def test_run_equals_python_api_and_limits_curve(ratio, amp_factor, zeta, interfa
     around the stuck resonance: the summary of `run`, the Python API (`analyse`) and the
     limits curve give the same T_dyn and dissipation (same computation, bit for bit)."""
     from slipcycle.rods.case import analyse, parse_case, run_case
-    from slipcycle.rods.limits import gross_slip_amplitude, parse_limits, run_limits
+    from slipcycle.rods.limits import gross_slip_amplitude
+    from slipcycle.studies.limits import parse_limits, run_limits
 
     base = parse_case(parse_case_text(_case(interface, zeta, 1e-3, ratio)))
     amp = amp_factor * gross_slip_amplitude(base.rods, base.exc.axial_force)
@@ -279,7 +280,7 @@ def _check_units_and_flags(out):
 
 def test_run_and_limits_summaries_have_units_and_flags():
     from slipcycle.rods.case import run_case
-    from slipcycle.rods.limits import parse_limits, run_limits
+    from slipcycle.studies.limits import parse_limits, run_limits
 
     text = _case("iwan").replace("regularisation = false", "regularisation_points = 8")
     out = run_case(parse_case_text(text))
@@ -338,7 +339,7 @@ def test_run_figures_have_no_clipped_or_overlapping_text(amp):
 def test_limits_figures_mark_unconverged_points_and_store_the_mask():
     """Two cycles are not enough for a steady state at most points: they are drawn as ×
     with a legend entry and stored as boolean masks in result.nc."""
-    from slipcycle.rods.limits import parse_limits, run_limits
+    from slipcycle.studies.limits import parse_limits, run_limits
 
     text = _case(limits="""[limits]
 frequency_ratio = [0.05, 0.3, 1.2]
@@ -389,7 +390,8 @@ def test_limits_examples_quoted_numbers(example, w1, torque, dissipation):
     """The limit frequencies quoted in docs/rods.md and the example headers (frequency
     sweep only; the sweep is cut after the torque crossing, which changes nothing before)."""
     from slipcycle.io import read_case
-    from slipcycle.rods.limits import limit_frequency, make_study, parse_limits
+    from slipcycle.rods.limits import limit_frequency, make_study
+    from slipcycle.studies.limits import parse_limits
 
     lc = parse_limits(read_case(EXAMPLES / example), 0.05, maps=False)
     study, _ = make_study(lc.rc)

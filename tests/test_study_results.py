@@ -171,9 +171,9 @@ def test_w_hat_map_result_is_what_the_command_writes(run_cli, write_case, monkey
 @pytest.mark.parametrize("maps", [True, False], ids=["maps", "no-maps"])
 def test_limits_result_is_what_the_command_writes(run_cli, write_case, monkeypatch, tmp_path,
                                                   maps):
-    from slipcycle.rods.limits import LimitsResult
+    from slipcycle.studies.limits import LimitsResult
 
-    kept = _capture(monkeypatch, "slipcycle.rods.limits", "limits_study")
+    kept = _capture(monkeypatch, "slipcycle.studies.limits", "limits_study")
     out = tmp_path / "l"
     code, _, err = run_cli("limits", write_case(RODS_CASE), "--tolerance", "0.05", "--out",
                            out, *(() if maps else ("--no-maps",)))

@@ -20,7 +20,7 @@ With the case's own settings ``slipcycle limits`` gives the limit frequency rati
 # %%
 import slipcycle
 from slipcycle.io import parse_case_text
-from slipcycle.rods.limits import limits_study, parse_limits
+from slipcycle.studies.limits import limits_study, parse_limits
 
 text = slipcycle.example_path("rods_limits_equal").read_text()
 coarse = (text

@@ -35,7 +35,7 @@ def add_parser(sub) -> None:
 
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.io import read_case, write_outputs
-    from slipcycle.rods.limits import limits_study, parse_limits
+    from slipcycle.studies.limits import limits_study, parse_limits
 
     case = read_case(args.case, models=["rods"])
     lc = parse_limits(case, args.tolerance, maps=not args.no_maps)

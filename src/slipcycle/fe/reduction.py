@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from slipcycle.condensation import schur_complement
 from slipcycle.fe.assembly import BodyDofs
 from slipcycle.fe.contact import ContactSet
+from slipcycle.figure_task import figure_task
 from slipcycle.materials import dundurs_beta
 from slipcycle.result import _Contract, _fmt, _html_table
 
@@ -236,21 +237,9 @@ class ReducedModel(_Contract):
         return ds
 
     def figures(self, dataset=None) -> dict:
-        """``coupling``: |A|, |B|, |C| as images over the contact nodes."""
-        def draw():
-            from matplotlib.figure import Figure
-
-            fig = Figure(figsize=(10, 3.4))
-            for ax, (name, M) in zip(fig.subplots(1, 3), (("A", self.A), ("B", self.B),
-                                                         ("C", self.C)), strict=True):
-                im = ax.imshow(np.abs(M), cmap="viridis")
-                ax.set_title(f"|{name}| [N/m]")
-                ax.set_xlabel("node")
-                fig.colorbar(im, ax=ax, shrink=0.8)
-            fig.tight_layout()
-            return fig
-
-        return {"coupling": draw}
+        """``coupling``: |A|, |B|, |C| as images over the contact nodes
+        (:func:`slipcycle.plot.fe.coupling`)."""
+        return {"coupling": figure_task("slipcycle.plot.fe:coupling", self.A, self.B, self.C)}
 
     def __repr__(self) -> str:
         s = self.summary()

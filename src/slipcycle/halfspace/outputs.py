@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
 from typing import ClassVar
 
 import numpy as np
 import xarray as xr
 
+from slipcycle.figure_task import figure_task
 from slipcycle.halfspace.bed import SliderBed
 from slipcycle.halfspace.history import HistoryResult
 from slipcycle.halfspace.model import HalfspaceModel
@@ -277,20 +277,21 @@ class HalfspaceResult(RunResult):
         """Figure name -> function drawing it (``hysteresis``, ``load_path``, and where
         the data exist ``tractions``, ``dissipation_density``, ``stick_zone``).
 
-        Each function is a :func:`functools.partial` of a :mod:`slipcycle.plot.halfspace`
-        function and the Dataset: it can be pickled, so the command line draws the figures
-        in worker processes, and matplotlib is imported only when one is drawn.
+        Each is a :class:`~slipcycle.figure_task.FigureTask` naming a
+        :mod:`slipcycle.plot.halfspace` function with the Dataset: it can be pickled, so the
+        command line draws the figures in worker processes, and matplotlib is imported only
+        when one is drawn.
         """
-        from slipcycle.plot import halfspace as hplot
-
+        plot = "slipcycle.plot.halfspace:"
         ds = self.to_dataset() if dataset is None else dataset
-        figures = {"hysteresis": partial(hplot.hysteresis, ds),
-                   "load_path": partial(hplot.load_path, ds, float(self.model_input.friction))}
+        figures = {"hysteresis": figure_task(plot + "hysteresis", ds),
+                   "load_path": figure_task(plot + "load_path", ds,
+                                             float(self.model_input.friction))}
         if "shear_traction" in ds:
-            figures["tractions"] = partial(hplot.tractions, ds)
-            figures["dissipation_density"] = partial(hplot.dissipation_density, ds)
+            figures["tractions"] = figure_task(plot + "tractions", ds)
+            figures["dissipation_density"] = figure_task(plot + "dissipation_density", ds)
         if "stick_size" in ds and self.history.cycles_run:
-            figures["stick_zone"] = partial(hplot.stick_zone, ds)
+            figures["stick_zone"] = figure_task(plot + "stick_zone", ds)
         return figures
 
 

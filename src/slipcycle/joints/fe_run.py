@@ -27,7 +27,6 @@ import copy
 import logging
 import time
 from dataclasses import dataclass
-from functools import partial
 from typing import Any, ClassVar
 
 import numpy as np
@@ -55,6 +54,7 @@ from slipcycle.fe.model import (
     read_discrete_table,
 )
 from slipcycle.fe.reduction import Problem, reduce_problem
+from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, CaseError, RunOutputs
 from slipcycle.io.matrices import StiffnessError, check_stiffness
 from slipcycle.joints.convergence import MeshConvergence, mesh_convergence
@@ -466,13 +466,15 @@ class FEResult(RunResult):
 
     def figures(self, dataset=None) -> dict[str, Any]:
         """The finest mesh's figures and ``mesh_convergence`` (dissipation vs spacing)."""
-        from slipcycle.joints.fe_plot import mesh_convergence_figure
-
         ds = self.to_dataset() if dataset is None else dataset
         figs = dict(self.finest.figures(ds))
-        figs["mesh_convergence"] = partial(
-            mesh_convergence_figure, [m.spacing for m in self.meshes],
-            [m.dissipation for m in self.meshes], self.mesh_convergence,
+        mc = self.mesh_convergence
+        figs["mesh_convergence"] = figure_task(
+            "slipcycle.plot.fe:mesh_convergence", [m.spacing for m in self.meshes],
+            [m.dissipation for m in self.meshes],
+            observed_order=None if mc is None else mc.observed_order,
+            extrapolated=None if mc is None else mc.extrapolated,
+            converged=None if mc is None else mc.converged,
             title=f"{self.fe_case.geometry}: dissipation per cycle")
         return figs
 

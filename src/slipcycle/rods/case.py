@@ -17,11 +17,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import partial
 from typing import ClassVar
 
 import numpy as np
 
+from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, RunOutputs, Section
 from slipcycle.io.sizes import MEMORY_LIMIT, check_memory, memory_limit
 from slipcycle.result import STEADY_STATES, RunResult, classify
@@ -122,7 +122,7 @@ def parse_case(case: Case, *, finish: bool = True, limits: bool = False) -> Rods
     """Validate a rods case completely (raises CaseError naming the key).
 
     ``limits=False`` (``slipcycle run``, sweeps) accepts a ``[limits]`` table unread;
-    ``limits=True`` leaves it to :func:`slipcycle.rods.limits.parse_limits`.
+    ``limits=True`` leaves it to :func:`slipcycle.studies.limits.parse_limits`.
     """
     from slipcycle.rods.welded import omega1
 
@@ -509,13 +509,11 @@ class RodsResult(RunResult):
 
     def figures(self, dataset=None) -> dict:
         """``hysteresis``, ``time_history`` and, with the study, ``regularisation``."""
-        from slipcycle.plot import rods as plots
-
         ds = self.to_dataset() if dataset is None else dataset
         reg = self.analysis["reg"]
-        # partials of module-level functions: picklable, so drawn by the CLI's workers
-        figures = {"hysteresis": partial(plots.hysteresis, ds),
-                   "time_history": partial(plots.time_history, ds)}
+        # plot functions named by string: picklable, so drawn by the CLI's workers
+        figures = {"hysteresis": figure_task("slipcycle.plot.rods:hysteresis", ds),
+                   "time_history": figure_task("slipcycle.plot.rods:time_history", ds)}
         if reg is not None:
             figures.update(reg.figures())
         return figures

@@ -21,11 +21,11 @@ import math
 import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
-from functools import partial
 from typing import Any, ClassVar
 
 import numpy as np
 
+from slipcycle.figure_task import figure_task
 from slipcycle.result import StudyResult
 from slipcycle.rods.interfaces import Bed, Iwan, SegalmanIwan, gross_slip_torque, interface_law
 from slipcycle.rods.model import Excitation, TwoRods
@@ -164,9 +164,7 @@ class RegularisationResult(StudyResult, Mapping):
 
     def figures(self, dataset=None) -> dict:
         """``regularisation``: dissipation versus T*/T_g and Θ_a/Θ_g, log–log."""
-        from slipcycle.plot import rods as plots
-
-        return {"regularisation": partial(plots.regularisation, self)}
+        return {"regularisation": figure_task("slipcycle.plot.rods:regularisation", self)}
 
 
 def _slope(x, y):

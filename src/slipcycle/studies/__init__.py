@@ -14,6 +14,9 @@ this package, nor the sweep engine, nor the figures (contract ``models-below-stu
   (``slipcycle map``)
 - :mod:`~slipcycle.studies.roughness`   which wavelengths of a rough surface matter
   (``slipcycle roughness``)
+- :mod:`~slipcycle.studies.limits`      limit frequency of the quasi-static analysis of
+  two rods and its regime maps (``slipcycle limits``; the analysis is
+  :mod:`slipcycle.rods.limits`)
 - :mod:`~slipcycle.studies.case_sweep`  sweeps over the keys of any case
   (``slipcycle sweep``)
 """
