@@ -7,29 +7,28 @@ figures. Keys are documented in ``docs/discrete.md``.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import partial
 from typing import ClassVar
 
 import numpy as np
 import xarray as xr
 
+from slipcycle.coupled.case import SHARED_FLAGS, SHARED_UNITS, CoupledResult, solve
+from slipcycle.coupled.settings import RunSettings
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import STATE_NAMES, FrictionalSystem, ModelError
 from slipcycle.discrete.shakedown import extreme_constraints, safe_vertices
 from slipcycle.discrete.steady import (
-    STEADY_CLASSES,
     InadmissibleInitialState,
     initial_state,
     simulate,
 )
 from slipcycle.discrete.wellposed import critical_friction
+from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.io.case import case_error_of
 from slipcycle.io.loads import load_cases, periodic_load, protocol_states, run_settings
-from slipcycle.result import STEADY_STATES, RunResult, SteadyState
 
 __all__ = ["run_case", "read_discrete_case", "DiscreteCase", "DiscreteResult", "discrete_case",
            "solve_case", "solve_model", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
@@ -175,7 +174,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     load = DiscreteLoad(periodic_load(ld, "p", n, lam), periodic_load(ld, "q", n, lam),
                         load_cases(ld, n, lam, 1, file_case))
     rn = case.section("run", required=False)
-    run = run_settings(rn)
+    run = RunSettings(**run_settings(rn))
     case.finish()
 
     # -- sizes: refuse what cannot be allocated, before any work --------------------------
@@ -183,7 +182,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
 
     check_memory(sec.key("A") if not sec.has("stiffness_file") else
                  sec.key("stiffness_file"), system_bytes(n), f"{n} contact nodes")
-    steps, cyc = run["steps_per_cycle"], run["cycles"]
+    steps, cyc = run.steps_per_cycle, run.cycles
     # blame the key the user set (both appear in the message)
     key = "cycles" if rn.has("cycles") and not rn.has("steps_per_cycle") else "steps_per_cycle"
     check_memory(rn.key(key), run_bytes(n, steps, cyc, record),
@@ -199,7 +198,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     fc = system.critical_friction
     if init is not None:
         r0 = load(np.array([0.0]))[0]
-        F = max(float(np.max(np.abs(load.cycle_samples(run["steps_per_cycle"])[1]))), 1e-300)
+        F = max(float(np.max(np.abs(load.cycle_samples(run.steps_per_cycle)[1]))), 1e-300)
         try:
             initial_state(system, r0, init, 1e-10 * F)
         except InadmissibleInitialState as exc:
@@ -262,56 +261,10 @@ def _dataset(dc: DiscreteCase, res) -> xr.Dataset:
 
 
 #: unit of every numeric summary entry (node indices, counts, flags and ratios: "1")
-SUMMARY_UNITS = {
-    "n_nodes": "1", "converged": "1", "residual": "1", "cycles_run": "1",
-    "dissipation_per_cycle": "J", "dissipation_per_node": "J",
-    "work_of_loads_per_cycle": "J", "energy_balance_error": "1", "slipping_nodes": "1",
-    "permanently_stuck_nodes": "1", "separating_nodes": "1", "separation": "1",
-    "ratchet_per_cycle": "m", "memory_erased": "1", "f_crit": "1",
-    "f_crit_lower_bound": "1", "friction_max": "1", "well_posed": "1", "events_total": "1",
-    "events_last_cycle": "1", "wall_time_s": "s",
-}
+SUMMARY_UNITS = {**SHARED_UNITS, "events_total": "1", "events_last_cycle": "1"}
 
 #: every word of the categorical summary entries (position = code in sweep stores)
-SUMMARY_FLAGS = {
-    "steady_state": STEADY_CLASSES,
-    "steady_state_class": STEADY_STATES,
-    "f_crit_method": ("exact", "bound"),
-}
-
-
-def summarize(dc: DiscreteCase, res, wall: float) -> dict:
-    """The summary dictionary (keys documented in docs/discrete.md)."""
-    fc = dc.f_crit
-    return {
-        "model": "discrete",
-        "n_nodes": dc.system.n_nodes,
-        "steady_state": res.steady_state,
-        "steady_state_class": SteadyState(res.steady_state).value,
-        "converged": res.steady_converged,
-        "residual": res.residual,
-        "cycles_run": res.cycles_run,
-        "dissipation_per_cycle": res.dissipation_per_cycle,
-        "dissipation_per_node": res.dissipation_per_node,
-        "work_of_loads_per_cycle": res.work_of_loads,
-        "energy_balance_error": res.energy_balance_error,
-        "slipping_nodes": res.slipping_nodes,
-        "permanently_stuck_nodes": res.permanently_stuck_nodes,
-        "separating_nodes": res.separating_nodes,
-        "separation": bool(res.separating_nodes),
-        "ratchet_per_cycle": res.ratchet_per_cycle if res.steady_state == "ratcheting"
-        else None,
-        "memory_erased": res.all_slip_or_separated,
-        "f_crit": fc.f_crit,
-        "f_crit_lower_bound": fc.lower_bound,
-        "f_crit_method": fc.method,
-        "friction_max": float(np.max(dc.system.friction)),
-        "well_posed": bool(np.max(dc.system.friction) < fc.f_crit),
-        "events_total": int(sum(res.events_per_cycle)),
-        "events_last_cycle": int(res.events_per_cycle[-1]),
-        "wall_time_s": wall,
-        "units": dict(SUMMARY_UNITS),
-    }
+SUMMARY_FLAGS = {**SHARED_FLAGS, "f_crit_method": ("exact", "bound")}
 
 
 def _v_space_geometry(dc: DiscreteCase):
@@ -321,7 +274,7 @@ def _v_space_geometry(dc: DiscreteCase):
 
 
 #: run settings of a discrete case built in Python (the defaults of the ``[run]`` table)
-RUN_DEFAULTS = {"cycles": 40, "steps_per_cycle": 100, "tol": 1e-8, "min_cycles": 1}
+RUN_DEFAULTS = RunSettings()
 
 
 def discrete_case(system: FrictionalSystem, load, run: Mapping | None = None, *,
@@ -350,12 +303,7 @@ def discrete_case(system: FrictionalSystem, load, run: Mapping | None = None, *,
     -------
     DiscreteCase
     """
-    settings = dict(RUN_DEFAULTS)
-    for key, value in dict(run or {}).items():
-        key = "tol" if key in ("steady_tol", "tolerance") else key
-        if key not in RUN_DEFAULTS:
-            raise TypeError(f"unknown run setting {key!r} (known: {', '.join(RUN_DEFAULTS)})")
-        settings[key] = value
+    settings = RunSettings.of(run, RUN_DEFAULTS)
     fc = system.critical_friction if f_crit_exact_max_nodes == \
         system.f_crit_exact_max_nodes else critical_friction(
             system.A, system.B, system.friction, exact_max_nodes=f_crit_exact_max_nodes)
@@ -364,70 +312,25 @@ def discrete_case(system: FrictionalSystem, load, run: Mapping | None = None, *,
                         None if protocol is None else np.asarray(protocol, float))
 
 
-_DETAIL_MESSAGES = {
-    "shakedown": "shakedown: no node slips in the steady cycle",
-    "cyclic_slip": "cyclic slip: some nodes slip every cycle, the others stay stuck",
-    "ratcheting": "ratcheting: slip accumulates by the same amount every cycle",
-    "not_converged": "no steady cycle within the cycles allowed",
-}
-
-
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
-class DiscreteResult(RunResult):
-    """Result of a discrete run: the shared vocabulary of :class:`~slipcycle.result.RunResult`
-    over the validated case and the steady-state simulation.
-
-    ``steady_state`` is the word of :func:`~slipcycle.discrete.steady.simulate` (already
-    one of :class:`~slipcycle.result.SteadyState`); ``steady_state_detail`` repeats it.
-
-    Attributes
-    ----------
-    case : DiscreteCase
-        The validated system, load and run settings.
-    solution : SteadyResult
-        Histories of every cycle run and the classification of the last one.
-    wall_time : float
-        Seconds the simulation took (``wall_time_s`` of the summary).
-    """
+class DiscreteResult(CoupledResult):
+    """Result of a discrete run (:class:`~slipcycle.coupled.case.CoupledResult` over a
+    :class:`DiscreteCase` and the :class:`~slipcycle.discrete.steady.SteadyResult` of
+    :func:`~slipcycle.discrete.steady.simulate`)."""
 
     model: ClassVar[str] = "discrete"
+    SUMMARY_UNITS: ClassVar[dict] = SUMMARY_UNITS
+    SUMMARY_FLAGS: ClassVar[dict] = SUMMARY_FLAGS
 
-    case: DiscreteCase
-    solution: object
-    wall_time: float
+    def critical_friction(self):
+        """The case's critical friction (exact up to its ``f_crit_exact_max_nodes``)."""
+        return self.case.f_crit
 
-    @classmethod
-    def from_solution(cls, dc: DiscreteCase, res, wall: float) -> DiscreteResult:
-        """Wrap the output of :func:`~slipcycle.discrete.steady.simulate`.
-
-        Parameters
-        ----------
-        dc : DiscreteCase
-        res : SteadyResult
-        wall : float
-            Seconds the simulation took.
-
-        Returns
-        -------
-        DiscreteResult
-        """
-        msg = (f"{_DETAIL_MESSAGES[res.steady_state]} ({res.cycles_run} cycles, residual "
-               f"{res.residual:.3g})")
-        return cls(steady_state=SteadyState(res.steady_state),
-                   steady_state_detail=res.steady_state,
-                   dissipation_per_cycle=res.dissipation_per_cycle,
-                   cycles_run=int(res.cycles_run), residual=float(res.residual),
-                   converged=bool(res.steady_converged), message=msg,
-                   case=dc, solution=res, wall_time=wall)
-
-    @property
-    def flags(self) -> dict[str, tuple[str, ...]]:
-        """Every word of the categorical summary entries (:data:`SUMMARY_FLAGS`)."""
-        return dict(SUMMARY_FLAGS)
-
-    def summary(self) -> dict:
-        """The summary dictionary (keys documented in docs/discrete.md), with ``units``."""
-        return summarize(self.case, self.solution, self.wall_time)
+    def own_summary(self) -> dict:
+        """``events_total`` and ``events_last_cycle`` of the exact event-driven engine."""
+        res = self.solution
+        return {"events_total": int(sum(res.events_per_cycle)),
+                "events_last_cycle": int(res.events_per_cycle[-1])}
 
     def to_dataset(self) -> xr.Dataset:
         """States, reactions and node states of every cycle run; loads, dissipation and
@@ -436,17 +339,17 @@ class DiscreteResult(RunResult):
 
     def figures(self, dataset: xr.Dataset | None = None) -> dict:
         """``slip_and_tractions``, ``hysteresis`` and, for two nodes, ``v_space``."""
-        from slipcycle.plot import discrete as plots  # matplotlib only when figures are made
-
         ds = self.to_dataset() if dataset is None else dataset
         dc, res = self.case, self.solution
-        # partials of module-level functions: picklable, so drawn by the CLI's workers
+        # plot functions named by string (the model does not import slipcycle.plot):
+        # picklable, so drawn by the CLI's workers; matplotlib only when drawn
+        plot = "slipcycle.plot.discrete:"
         figures = {
-            "slip_and_tractions": partial(plots.slip_and_tractions, ds),
-            "hysteresis": partial(plots.hysteresis, ds),
+            "slip_and_tractions": figure_task(plot + "slip_and_tractions", ds),
+            "hysteresis": figure_task(plot + "hysteresis", ds),
         }
         if dc.system.n_nodes == 2:
-            figures["v_space"] = partial(plots.v_space, res, *_v_space_geometry(dc))
+            figures["v_space"] = figure_task(plot + "v_space", res, *_v_space_geometry(dc))
         return figures
 
 
@@ -472,16 +375,8 @@ def solve_model(dc, load=None, run: Mapping | None = None, *, progress=None,
     -------
     DiscreteResult
     """
-    if isinstance(dc, FrictionalSystem):
-        if load is None:
-            raise TypeError("a FrictionalSystem needs its load: (system, load[, run])")
-        dc = discrete_case(dc, load, run, **kwargs)
-    elif not isinstance(dc, DiscreteCase) or load is not None or run or kwargs:
-        raise TypeError("expected a DiscreteCase, or a FrictionalSystem with its load")
-    t0 = time.perf_counter()
-    res = simulate(dc.system, dc.load, initial_slip=dc.initial_slip, protocol=dc.protocol,
-                   progress=progress, **dc.run)
-    return DiscreteResult.from_solution(dc, res, time.perf_counter() - t0)
+    return solve(DiscreteResult, DiscreteCase, FrictionalSystem, discrete_case, simulate, dc,
+                 load, run, progress, **kwargs)
 
 
 def solve_case(case: Case, progress=None) -> DiscreteResult:

@@ -8,39 +8,36 @@ components per node (node-major: ``q0 = [[q_t1, q_t2], ...]``).
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import ClassVar
 
 import numpy as np
 import xarray as xr
 
+from slipcycle.coupled.case import SHARED_FLAGS, SHARED_UNITS, CoupledResult, solve
+from slipcycle.coupled.settings import RunSettings
 from slipcycle.discrete3d.fields import write_fields
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import STATE_NAMES, FrictionalSystem3D, ModelError3D
 from slipcycle.discrete3d.steady import (
-    STEADY_CLASSES,
     InadmissibleInitialState3D,
-    SteadyResult3D,
     initial_state_3d,
     simulate3d,
 )
+from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, RunOutputs, Section
 from slipcycle.io.case import case_error_of
 from slipcycle.io.loads import load_cases, periodic_load, protocol_states, run_settings
 from slipcycle.io.matrices import read_case_stiffness
-from slipcycle.result import STEADY_STATES, RunResult, SteadyState
 
 __all__ = ["Discrete3DCase", "DiscreteResult3D", "read_discrete3d_case", "discrete3d_case",
            "solve_case", "solve_model", "run_case", "SUMMARY_UNITS", "SUMMARY_FLAGS",
            "RUN_DEFAULTS"]
 
 #: run settings of a case built in Python (the defaults of the ``[run]`` table)
-RUN_DEFAULTS = {"cycles": 40, "steps_per_cycle": 100, "tol": 1e-8, "min_cycles": 1,
-                "step_tol": 1e-7, "replay": False}
+RUN_DEFAULTS = RunSettings(step_tol=1e-7, replay=False)
 FIELD_FORMATS = ("xdmf", "pvd")
 
 
@@ -52,8 +49,8 @@ class Discrete3DCase:
     ----------
     system : FrictionalSystem3D
     load : Load3D
-    run : dict
-        ``cycles``, ``steps_per_cycle``, ``tol``, ``min_cycles``, ``step_tol``.
+    run : RunSettings
+        ``cycles``, ``steps_per_cycle``, ``tol``, ``min_cycles``, ``step_tol``, ``replay``.
     initial_slip : (N, 2) array or None
     protocol : (S, 3N) array or None
     fields : tuple of str
@@ -62,7 +59,7 @@ class Discrete3DCase:
 
     system: FrictionalSystem3D
     load: Load3D
-    run: dict
+    run: RunSettings
     initial_slip: np.ndarray | None = None
     protocol: np.ndarray | None = None
     fields: tuple = FIELD_FORMATS
@@ -132,8 +129,8 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     load = Load3D(p=periodic_load(ld, "p", n, lam, 2), q=periodic_load(ld, "q", n, lam, 2),
                   cases=load_cases(ld, n, lam, 2, file_case))
     rn = case.section("run", required=False)
-    run = run_settings(rn, step_tol=("step_tolerance", lambda s, k: s.float(
-        k, 1e-7, gt=0.0, lt=1.0)), replay=("replay", lambda s, k: s.bool(k, False)))
+    run = RunSettings(**run_settings(rn, step_tol=("step_tolerance", lambda s, k: s.float(
+        k, 1e-7, gt=0.0, lt=1.0)), replay=("replay", lambda s, k: s.bool(k, False))))
     out = case.section("output", required=False)
     fields = out.data.get("fields", list(FIELD_FORMATS))
     if isinstance(fields, str):
@@ -155,7 +152,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
         raise case_error_of(exc, keys) from None
     if init is not None:
         r0 = load(np.array([0.0]))[0]
-        F = max(float(np.max(np.abs(load.cycle_samples(run["steps_per_cycle"])[1]))), 1e-300)
+        F = max(float(np.max(np.abs(load.cycle_samples(run.steps_per_cycle)[1]))), 1e-300)
         try:
             initial_state_3d(system, r0, init, 1e-10 * F)
         except InadmissibleInitialState3D as exc:
@@ -183,13 +180,7 @@ def discrete3d_case(system: FrictionalSystem3D, load: Load3D, run: Mapping | Non
     -------
     Discrete3DCase
     """
-    settings = dict(RUN_DEFAULTS)
-    for key, value in dict(run or {}).items():
-        key = "tol" if key in ("steady_tol", "tolerance") else key
-        if key not in RUN_DEFAULTS:
-            raise TypeError(f"unknown run setting {key!r} (known: {', '.join(RUN_DEFAULTS)})")
-        settings[key] = value
-    return Discrete3DCase(system, load, settings,
+    return Discrete3DCase(system, load, RunSettings.of(run, RUN_DEFAULTS),
                           None if initial_slip is None else np.asarray(initial_slip, float),
                           None if protocol is None else np.asarray(protocol, float),
                           tuple(fields))
@@ -197,104 +188,37 @@ def discrete3d_case(system: FrictionalSystem3D, load: Load3D, run: Mapping | Non
 
 #: unit of every numeric summary entry
 SUMMARY_UNITS = {
-    "n_nodes": "1", "converged": "1", "residual": "1", "cycles_run": "1",
-    "dissipation_per_cycle": "J", "dissipation_per_node": "J",
-    "dissipation_per_area": "J/m^2", "work_of_loads_per_cycle": "J",
-    "energy_balance_error": "1", "slipping_nodes": "1", "permanently_stuck_nodes": "1",
-    "separating_nodes": "1", "separation": "1", "ratchet_per_cycle": "m",
-    "memory_erased": "1", "f_crit": "1", "f_crit_lower_bound": "1", "friction_max": "1",
-    "well_posed": "1", "steps_last_cycle": "1", "refinements_last_cycle": "1",
-    "unresolved_steps": "1", "newton_iterations": "1", "wall_time_s": "s",
+    **SHARED_UNITS, "dissipation_per_area": "J m-2", "steps_last_cycle": "1",
+    "refinements_last_cycle": "1", "unresolved_steps": "1", "newton_iterations": "1",
 }
 
 #: every word of the categorical summary entries
-SUMMARY_FLAGS = {"steady_state": STEADY_CLASSES, "steady_state_class": STEADY_STATES}
-
-_MESSAGES = {
-    "shakedown": "shakedown: no node slips in the steady cycle",
-    "cyclic_slip": "cyclic slip: some nodes slip every cycle, the others stay stuck",
-    "ratcheting": "ratcheting: slip accumulates by the same amount every cycle",
-    "not_converged": "no steady cycle within the cycles allowed",
-}
-
-
-def _finite(x):
-    return None if x is None or not np.isfinite(x) else float(x)
+SUMMARY_FLAGS = SHARED_FLAGS
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
-class DiscreteResult3D(RunResult):
-    """Result of a ``discrete3d`` run (the shared vocabulary of
-    :class:`~slipcycle.result.RunResult`).
-
-    Attributes
-    ----------
-    case : Discrete3DCase
-    solution : SteadyResult3D
-    wall_time : float
-        Seconds the simulation took.
-    """
+class DiscreteResult3D(CoupledResult):
+    """Result of a ``discrete3d`` run (:class:`~slipcycle.coupled.case.CoupledResult` over
+    a :class:`Discrete3DCase` and the :class:`~slipcycle.discrete3d.steady.SteadyResult3D`
+    of :func:`~slipcycle.discrete3d.steady.simulate3d`)."""
 
     model: ClassVar[str] = "discrete3d"
+    SUMMARY_UNITS: ClassVar[dict] = SUMMARY_UNITS
+    SUMMARY_FLAGS: ClassVar[dict] = SUMMARY_FLAGS
 
-    case: Discrete3DCase
-    solution: SteadyResult3D
-    wall_time: float
+    def ratchet(self) -> np.ndarray:
+        """The ratchet per cycle of each node, (N, 2) [m]."""
+        return self.solution.ratchet_per_cycle.reshape(-1, 2)
 
-    @classmethod
-    def from_solution(cls, dc: Discrete3DCase, res: SteadyResult3D, wall: float
-                      ) -> DiscreteResult3D:
-        """Wrap the output of :func:`~slipcycle.discrete3d.steady.simulate3d`."""
-        msg = (f"{_MESSAGES[res.steady_state]} ({res.cycles_run} cycles, residual "
-               f"{res.residual:.3g})")
-        return cls(steady_state=SteadyState(res.steady_state),
-                   steady_state_detail=res.steady_state,
-                   dissipation_per_cycle=res.dissipation_per_cycle,
-                   cycles_run=int(res.cycles_run), residual=float(res.residual),
-                   converged=bool(res.steady_converged), message=msg, case=dc,
-                   solution=res, wall_time=wall)
-
-    @property
-    def flags(self) -> dict[str, tuple[str, ...]]:
-        """Every word of the categorical summary entries (:data:`SUMMARY_FLAGS`)."""
-        return dict(SUMMARY_FLAGS)
-
-    def summary(self) -> dict:
-        """The summary dictionary (keys in docs/discrete3d.md), with ``units``."""
+    def own_summary(self) -> dict:
+        """Dissipation per area and the step control's counts."""
         s, res = self.case.system, self.solution
-        fc = s.critical_friction
-        fmax = float(np.max(s.friction))
         return {
-            "model": "discrete3d",
-            "n_nodes": s.n_nodes,
-            "steady_state": res.steady_state,
-            "steady_state_class": SteadyState(res.steady_state).value,
-            "converged": res.steady_converged,
-            "residual": res.residual,
-            "cycles_run": res.cycles_run,
-            "dissipation_per_cycle": res.dissipation_per_cycle,
-            "dissipation_per_node": res.dissipation_per_node,
             "dissipation_per_area": res.dissipation_per_node / s.area,
-            "work_of_loads_per_cycle": res.work_of_loads,
-            "energy_balance_error": res.energy_balance_error,
-            "slipping_nodes": res.slipping_nodes,
-            "permanently_stuck_nodes": res.permanently_stuck_nodes,
-            "separating_nodes": res.separating_nodes,
-            "separation": bool(res.separating_nodes),
-            "ratchet_per_cycle": (res.ratchet_per_cycle.reshape(-1, 2)
-                                  if res.steady_state == "ratcheting" else None),
-            "memory_erased": res.all_slip_or_separated,
-            "f_crit": _finite(fc.f_crit),
-            "f_crit_lower_bound": _finite(fc.lower_bound),
-            "f_crit_method": fc.method,
-            "friction_max": fmax,
-            "well_posed": bool(fmax < fc.f_crit),
             "steps_last_cycle": int(res.steps_per_cycle_taken[-1]),
             "refinements_last_cycle": int(res.refinements_per_cycle[-1]),
             "unresolved_steps": int(res.unresolved_steps),
             "newton_iterations": int(res.solver_stats.get("newton_iterations", 0)),
-            "wall_time_s": self.wall_time,
-            "units": dict(SUMMARY_UNITS),
         }
 
     def to_dataset(self) -> xr.Dataset:
@@ -382,17 +306,17 @@ class DiscreteResult3D(RunResult):
     def figures(self, dataset: xr.Dataset | None = None) -> dict:
         """``interface_states``, ``dissipation_map``, ``slip_directions``,
         ``dissipation_history``."""
-        from slipcycle.plot import interface3d as plots  # matplotlib only for figures
-
         ds = self.to_dataset() if dataset is None else dataset
         if ds.sizes["cycle"] == 0:
             return {}
-        # partials of module-level functions: picklable, so drawn by the CLI's workers
+        # plot functions named by string (the model does not import slipcycle.plot):
+        # picklable, so drawn by the CLI's workers; matplotlib only when drawn
+        plot = "slipcycle.plot.interface3d:"
         return {
-            "interface_states": partial(plots.state_map, ds),
-            "dissipation_map": partial(plots.dissipation_map, ds),
-            "slip_directions": partial(plots.slip_directions, ds),
-            "dissipation_history": partial(plots.dissipation_history, ds),
+            "interface_states": figure_task(plot + "state_map", ds),
+            "dissipation_map": figure_task(plot + "dissipation_map", ds),
+            "slip_directions": figure_task(plot + "slip_directions", ds),
+            "dissipation_history": figure_task(plot + "dissipation_history", ds),
         }
 
     def write_fields(self, directory: str | Path, formats=None) -> list[Path]:
@@ -442,16 +366,8 @@ def solve_model(dc, load: Load3D | None = None, run: Mapping | None = None, **kw
     -------
     DiscreteResult3D
     """
-    if isinstance(dc, FrictionalSystem3D):
-        if load is None:
-            raise TypeError("a FrictionalSystem3D needs its load: (system, load[, run])")
-        dc = discrete3d_case(dc, load, run, **kwargs)
-    elif not isinstance(dc, Discrete3DCase) or load is not None or run or kwargs:
-        raise TypeError("expected a Discrete3DCase, or a FrictionalSystem3D with its load")
-    t0 = time.perf_counter()
-    res = simulate3d(dc.system, dc.load, initial_slip=dc.initial_slip, protocol=dc.protocol,
-                     **dc.run)
-    return DiscreteResult3D.from_solution(dc, res, time.perf_counter() - t0)
+    return solve(DiscreteResult3D, Discrete3DCase, FrictionalSystem3D, discrete3d_case,
+                 simulate3d, dc, load, run, **kwargs)
 
 
 def solve_case(case: Case) -> DiscreteResult3D:
