@@ -32,6 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from slipcycle.halfspace.profiles import RoughExponential
+
 __all__ = ["SliderBed", "lumped_slider_slipped", "lumping_load", "make_bed",
            "rough_unit_bed", "UNLUMPED_FRACTION"]
 
@@ -231,8 +233,6 @@ def make_bed(profile, *, friction: float, compliance_ratio: float, P_max: float,
     Dimensionality Reduction in Contact Mechanics and Friction, Springer (equal increments
     of contact radius).
     """
-    from slipcycle.halfspace.profiles import RoughExponential
-
     if isinstance(profile, RoughExponential):
         lo = P_lo if P_lo is not None and P_lo > 0 else UNLUMPED_FRACTION * P_max
         level, k, edges = rough_unit_bed(lo / profile.reference_load,

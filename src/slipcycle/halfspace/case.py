@@ -35,6 +35,7 @@ from slipcycle.errors import InputError
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.loads import contact_loads
 from slipcycle.halfspace.model import HalfspaceModel, LoadPathError, solve
+from slipcycle.halfspace.outputs import HalfspaceResult
 from slipcycle.halfspace.profiles import (
     Cylinder2D,
     FlatPunch,
@@ -50,6 +51,8 @@ from slipcycle.halfspace.topography import (
     topography_profile,
 )
 from slipcycle.io import Case, CaseError, RunOutputs, Section
+from slipcycle.io.sizes import check_memory as check
+from slipcycle.io.sizes import memory_limit
 from slipcycle.loading import TabulatedLoad
 
 __all__ = ["parse_case", "run_case", "solve_case", "solve_model"]
@@ -316,9 +319,6 @@ def memory_estimate(model: HalfspaceModel) -> float:
 
 def check_memory(model: HalfspaceModel, limit: float | None = None) -> None:
     """Refuse (CaseError naming the key that asks most) runs that would not fit in memory."""
-    from slipcycle.io.sizes import check_memory as check
-    from slipcycle.io.sizes import memory_limit
-
     need = memory_estimate(model)
     if need <= (memory_limit() if limit is None else limit):
         return
@@ -348,8 +348,6 @@ def solve_model(model: HalfspaceModel):
         The shared result vocabulary (:class:`~slipcycle.result.RunResult`) over the bed
         and history of :func:`~slipcycle.halfspace.model.solve`.
     """
-    from slipcycle.halfspace.outputs import HalfspaceResult
-
     if not isinstance(model, HalfspaceModel):
         raise TypeError(f"expected a HalfspaceModel, got {type(model).__name__}")
     return HalfspaceResult.from_solution(model, *solve(model))

@@ -10,6 +10,8 @@ from slipcycle.errors import InputError
 from slipcycle.halfspace.bed import SliderBed, lumped_slider_slipped, lumping_load, make_bed
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.history import HistoryResult, run_history
+from slipcycle.halfspace.loads import contact_loads
+from slipcycle.halfspace.profiles import Cylinder2D, RoughExponential, Tabulated
 from slipcycle.loading import cycle_angles, piecewise_linear_path
 
 __all__ = ["HalfspaceModel", "LoadPathError", "solve"]
@@ -153,8 +155,6 @@ class HalfspaceModel:
             ``protocol[i]`` (assembly state i), ``profile.reference_depth`` (cylinder) or
             ``profile`` (table), with the ``reason`` of the failed check.
         """
-        from slipcycle.halfspace.profiles import Cylinder2D, RoughExponential, Tabulated
-
         if self.normal_control != "force":
             return
         _, cycle_n, _ = self.cycle_samples()
@@ -190,8 +190,6 @@ class HalfspaceModel:
         Exactly the meaning of the case-file keys of the same names (see
         :func:`~slipcycle.halfspace.contact_loads`); ``settings`` are the other fields.
         """
-        from slipcycle.halfspace.loads import contact_loads
-
         normal, tangential = contact_loads(P0, P1, Q0, Q1, phase, P1_phase, lam)
         settings.setdefault("elasticity", None)
         return cls(profile=profile, friction=friction, compliance_ratio=compliance_ratio,

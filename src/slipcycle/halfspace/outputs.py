@@ -9,10 +9,12 @@ import numpy as np
 import xarray as xr
 
 from slipcycle.figure_task import figure_task
+from slipcycle.halfspace import profiles as pr
 from slipcycle.halfspace.bed import SliderBed
 from slipcycle.halfspace.history import HistoryResult
 from slipcycle.halfspace.model import HalfspaceModel
 from slipcycle.halfspace.profiles import RoughExponential
+from slipcycle.halfspace.tractions import abel_operators, dissipation_density
 from slipcycle.io import RunOutputs
 from slipcycle.result import STEADY_STATES, RunResult, classify
 
@@ -57,8 +59,6 @@ PERMANENT_STICK_TOL = 1e-9
 
 
 def _profile_name(profile) -> str:
-    from slipcycle.halfspace import profiles as pr
-
     if isinstance(profile, pr.PowerLaw):
         return "sphere" if profile.n == 2.0 else "power_law"
     return {pr.Cylinder2D: "cylinder", pr.FlatPunch: "flat_punch",
@@ -343,8 +343,6 @@ def _dataset(model, bed, result, P_S, stick_size) -> xr.Dataset:
 
 
 def _add_tractions(ds: xr.Dataset, model, bed, result) -> None:
-    from slipcycle.halfspace.tractions import abel_operators, dissipation_density
-
     ops = abel_operators(bed)
     S = model.steps_per_cycle
     theta = np.linspace(0, 2 * np.pi, S + 1)

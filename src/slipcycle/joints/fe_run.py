@@ -40,6 +40,10 @@ from slipcycle.discrete.case import (
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
+from slipcycle.discrete3d.case import discrete3d_case
+from slipcycle.discrete3d.case import solve_model as solve_model_3d
+from slipcycle.discrete3d.loads import Load3D
+from slipcycle.discrete3d.model import FrictionalSystem3D, ModelError3D
 from slipcycle.errors import InputError
 from slipcycle.fe.loads import combined_loads
 from slipcycle.fe.meshfile3d import (
@@ -58,6 +62,8 @@ from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, CaseError, RunOutputs
 from slipcycle.io.matrices import StiffnessError, check_stiffness
 from slipcycle.joints.convergence import MeshConvergence, mesh_convergence
+from slipcycle.loading import HarmonicLoad
+from slipcycle.loading.nodal import LoadCase
 from slipcycle.result import RunResult
 
 __all__ = ["FECase", "MeshRun", "FEResult", "read_fe_case", "solve_fe", "solve_case",
@@ -214,13 +220,6 @@ def _spacing(coords: np.ndarray) -> float:
 def _solve_solid(fc: FECase, solid: MeshSolid, progress) -> tuple[Any, MeshRun]:
     """Reduce a tetrahedral body from a mesh file and solve it as a 3-D discrete system
     under the ``[fe.discrete]`` loads: the case ``slipcycle reduce --case`` writes."""
-    from slipcycle.discrete3d.case import discrete3d_case
-    from slipcycle.discrete3d.case import solve_model as solve_model_3d
-    from slipcycle.discrete3d.loads import Load3D
-    from slipcycle.discrete3d.model import FrictionalSystem3D, ModelError3D
-    from slipcycle.loading import HarmonicLoad
-    from slipcycle.loading.nodal import LoadCase
-
     t0 = time.perf_counter()
     red, area = reduce_mesh_case(solid)
     t1 = time.perf_counter()

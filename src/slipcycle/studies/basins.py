@@ -37,6 +37,7 @@ from slipcycle.discrete.basins import (
     run_record,
     run_records,
 )
+from slipcycle.discrete.case import read_discrete_case
 from slipcycle.discrete.shakedown import (
     lambda1,
     lambda2,
@@ -46,7 +47,7 @@ from slipcycle.discrete.shakedown import (
 from slipcycle.discrete.sizes import cells_bytes, check_memory
 from slipcycle.discrete.steady import STEADY_CODES
 from slipcycle.io import Case, CaseError
-from slipcycle.io.case import Section
+from slipcycle.io.case import Section, parse_case_text
 from slipcycle.plot.shakedown import basin_map
 from slipcycle.result import StudyResult
 from slipcycle.sweep import Axis, SweepError, run_sweep
@@ -62,11 +63,6 @@ __all__ = ["load_discrete_case", "basin_row_task", "basin_block_task", "grid_blo
 def load_discrete_case(case_text: str, case_path: str | None):
     """The validated :class:`~slipcycle.discrete.case.DiscreteCase` of a case text
     (cached per process). Tables other than the model's (e.g. ``[basins]``) are ignored."""
-    from pathlib import Path
-
-    from slipcycle.discrete.case import read_discrete_case
-    from slipcycle.io.case import Case, parse_case_text
-
     base = parse_case_text(case_text, Path(case_path) if case_path else None)
     data = {k: v for k, v in base.data.items()
             if k in ("model", "title", "description", "discrete", "loading", "run")}

@@ -27,6 +27,7 @@ import numpy as np
 import xarray as xr
 
 from slipcycle.discrete3d.basins import distinct_values, random_starts
+from slipcycle.discrete3d.case import read_discrete3d_case
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
 from slipcycle.discrete3d.steady import (
@@ -36,7 +37,7 @@ from slipcycle.discrete3d.steady import (
 )
 from slipcycle.errors import SolverError
 from slipcycle.io import Case, CaseError
-from slipcycle.io.case import Section
+from slipcycle.io.case import Section, parse_case_text
 from slipcycle.loading.nodal import force_scale
 from slipcycle.plot.interface3d import basin_dissipation
 from slipcycle.result import StudyResult
@@ -165,9 +166,6 @@ def read_protocols3d(path: Path, n: int) -> list[np.ndarray]:
 def load_discrete3d_case(case_text: str, case_path: str | None):
     """The validated :class:`~slipcycle.discrete3d.case.Discrete3DCase` of a case text
     (cached per process). Tables other than the model's (e.g. ``[basins]``) are ignored."""
-    from slipcycle.discrete3d.case import read_discrete3d_case
-    from slipcycle.io.case import parse_case_text
-
     base = parse_case_text(case_text, Path(case_path) if case_path else None)
     data = {k: v for k, v in base.data.items()
             if k in ("model", "title", "description", "discrete3d", "loading", "run",

@@ -16,6 +16,7 @@ from typing import ClassVar
 import numpy as np
 
 from slipcycle.figure_task import figure_task
+from slipcycle.io import CaseError
 from slipcycle.io.results import RunOutputs
 from slipcycle.io.sizes import check_memory
 from slipcycle.result import StudyResult
@@ -56,8 +57,6 @@ def parse_limits(case, tolerance: float, maps: bool = True) -> LimitsCase:
     geometric; default 0.01…3 × 40), ``amplitude_ratio`` (Θa/Θg, geometric; 0.3…3 × 20),
     ``position`` (L1/(L1 + L2), linear; 0.1…0.9 × 9), ``position_frequencies`` (20).
     """
-    from slipcycle.io import CaseError
-
     if not (0.0 < tolerance < 1.0):
         raise CaseError("--tolerance", f"must be in (0, 1), got {tolerance:g}")
     load = case.data.get("loading")
