@@ -204,3 +204,108 @@ def test_two_node_v_space_legend_names_only_constraint_lines_inside_a_panel(two_
     title = main.get_legend().get_title().get_text()
     for roman in outside:   # every constraint not drawn is still named, as out of view
         assert re.search(rf"(: |; ){roman} \(node", title), title
+
+
+# -- bolted lap joint (the demo's size: coarse mesh, two protocols, one mesh) -----------------
+
+
+@pytest.fixture(scope="module")
+def lap_joint():
+    import tomllib
+
+    from slipcycle.api import apply_overrides, toml_text
+    from slipcycle.demo import LAP_JOINT_DEMO
+
+    text = toml_text(apply_overrides(tomllib.loads(example_text("bolted_lap_joint")),
+                                     LAP_JOINT_DEMO))
+    result = slipcycle.run(text)
+    return result, result.to_outputs()
+
+
+def _draw(fig):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    return canvas.get_renderer()
+
+
+def test_lap_joint_protocol_figure_plots_the_differences_behind_orders_differ(lap_joint):
+    result, out = lap_joint
+    ds, s = out.dataset, out.summary
+    fig = out.figures["dissipation_by_protocol"]()
+    ax, axd = fig.axes[:2]
+    d = np.asarray(ds["dissipation"], float)
+    # the values, on an axis zoomed to them (bars from 0 would hide a 0.1 % spread)
+    lo, hi = ax.get_ylim()
+    assert lo > 0.9 * d.min() * 1e6 and hi < 1.1 * d.max() * 1e6
+    # the differences from the reference protocol, in per mille, and the tolerance band
+    (bars,) = axd.containers
+    heights = np.array([b.get_height() for b in bars])
+    np.testing.assert_allclose(heights, (d - d[0]) / d[0] * 1e3, rtol=1e-12, atol=1e-12)
+    tol = s["difference_tol"]
+    (band,) = [p for p in axd.patches if "difference_tol" in p.get_label()]
+    assert band.get_y() == pytest.approx(-tol * 1e3)
+    assert band.get_height() == pytest.approx(2 * tol * 1e3)
+    texts = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert any(f"{tol:g}" in t for t in texts)
+    # a spread beyond the band is what orders_differ says
+    assert s["orders_differ"] == (np.ptp(d) / d.max() > tol)
+    assert f"{s['dissipation_spread']:.3g}" in axd.get_title()
+    # one mesh: no "finest mesh" legend
+    assert ds.sizes["mesh"] == 1
+    assert not any("finest" in t for t in texts)
+    assert any("one mesh" in t for t in texts)
+
+
+@pytest.mark.parametrize("name", ["slip_maps", "dissipation_maps"])
+def test_lap_joint_interface_maps_outline_plates_holes_and_washers_and_fill_the_panel(
+        lap_joint, name):
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Circle, Rectangle
+
+    result, out = lap_joint
+    ds = out.dataset
+    desc = result.contact.description
+    fig = out.figures[name]()
+    c, w = desc["overlap_m"] * 1e3, desc["plate_width_m"] * 1e3
+    centres = np.asarray(desc["bolt_centres_m"]) * 1e3
+    maps = [ax for ax in fig.axes if ax.get_title().split(":")[0] in
+            [str(p) for p in ds["protocol_name"].values]]
+    assert len(maps) == ds.sizes["protocol"]
+    for ax in maps:
+        (rect,) = [p for p in ax.patches if isinstance(p, Rectangle)]
+        assert rect.get_xy() == pytest.approx((-c / 2, -w / 2))
+        assert (rect.get_width(), rect.get_height()) == pytest.approx((c, w))
+        circles = [(p.center, p.radius) for p in ax.patches if isinstance(p, Circle)]
+        for r in (desc["bolt_diameter_m"] / 2 * 1e3, desc["washer_diameter_m"] / 2 * 1e3):
+            found = sorted(tuple(np.round(ctr, 9)) for ctr, rad in circles
+                           if rad == pytest.approx(r))
+            assert found == sorted(tuple(np.round(x, 9)) for x in centres), (r, found)
+        # every node drawn as a disc of its area (not a fixed tiny marker) ...
+        (nodes,) = [col for col in ax.collections if isinstance(col, PatchCollection)]
+        assert len(nodes.get_paths()) == ds.sizes["node"]
+        radii = np.array([np.ptp(path.vertices[:, 0]) / 2 for path in nodes.get_paths()])
+        np.testing.assert_allclose(radii, 0.42 * np.sqrt(ds["node_area"].values) * 1e3,
+                                   rtol=1e-6)
+        # ... and the view is the joint, with no empty gap around it
+        x0, x1 = ax.get_xlim()
+        y0, y1 = ax.get_ylim()
+        assert x0 >= -c / 2 * 1.1 and x1 <= c / 2 * 1.1
+        assert y0 >= -w / 2 * 1.1 and y1 <= w / 2 * 1.1
+    # the panel takes most of the figure width given to it (no large empty gap)
+    renderer = _draw(fig)
+    width = fig.get_window_extent(renderer).width
+    used = sum(ax.get_window_extent(renderer).width for ax in fig.axes)
+    assert used > 0.6 * width, used / width
+
+
+def test_lap_joint_bolt_figure_keeps_its_legend_clear_of_the_bars(lap_joint):
+    _, out = lap_joint
+    fig = out.figures["dissipation_by_bolt"]()
+    renderer = _draw(fig)
+    legends = fig.legends + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    (legend,) = legends
+    box = legend.get_window_extent(renderer)
+    for bar in fig.axes[0].patches:
+        assert not box.overlaps(bar.get_window_extent(renderer))
