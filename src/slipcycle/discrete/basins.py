@@ -16,8 +16,8 @@ Barber 2008; Andersson, Barber & Ahn 2013). This module holds the engine of its 
 The study of ``slipcycle basins`` (sweep tasks, store, summary, Dataset, basin map) is
 :mod:`slipcycle.studies.basins`.
 
-Class codes are :data:`slipcycle.discrete.steady.STEADY_CODES`:
-0 shakedown, 1 cyclic_slip, 2 ratcheting, 3 not_converged, 4 inadmissible, 5 failed.
+Class codes are the positions in :data:`slipcycle.result.STEADY_STATES`, the one list of
+steady-state words.
 """
 
 from __future__ import annotations
@@ -29,17 +29,18 @@ from slipcycle.discrete.fastcycle import steady_states_batch
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.discrete.shakedown import admissible_region_at
-from slipcycle.discrete.steady import STEADY_CODES, InadmissibleInitialState, simulate
+from slipcycle.discrete.steady import InadmissibleInitialState, simulate
+from slipcycle.result import STEADY_STATES
 
 __all__ = ["run_record", "run_records", "basin_row", "admissible_box",
            "box_counting_dimension", "class_code", "empty_record", "INADMISSIBLE"]
 
-INADMISSIBLE = STEADY_CODES.index("inadmissible")
+INADMISSIBLE = STEADY_STATES.index("inadmissible")
 
 
 def class_code(state: str) -> int:
     """Integer code of a steady-state class (see module docstring)."""
-    return STEADY_CODES.index(state) if state in STEADY_CODES else STEADY_CODES.index("failed")
+    return STEADY_STATES.index(state) if state in STEADY_STATES else STEADY_STATES.index("failed")
 
 
 def empty_record(n: int, code: int) -> dict:

@@ -12,7 +12,7 @@ Andersson, Barber & Ahn 2013).
   basin map (:class:`BasinsResult`).
 
 The runs themselves are :mod:`slipcycle.discrete.basins` (records, box counting). Class
-codes are :data:`slipcycle.discrete.steady.STEADY_CODES`.
+codes are :data:`slipcycle.result.STEADY_STATES`.
 """
 
 from __future__ import annotations
@@ -45,17 +45,16 @@ from slipcycle.discrete.shakedown import (
     sample_initial_slips,
 )
 from slipcycle.discrete.sizes import cells_bytes, check_memory
-from slipcycle.discrete.steady import STEADY_CODES
 from slipcycle.io import Case, CaseError
 from slipcycle.io.case import Section, parse_case_text
 from slipcycle.plot.shakedown import basin_map
-from slipcycle.result import StudyResult
+from slipcycle.result import STEADY_STATES, StudyResult
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
 __all__ = ["load_discrete_case", "basin_row_task", "basin_block_task", "grid_blocks",
            "lam_start_task", "protocol_task", "random_task", "read_protocols", "parse_range",
-           "basins_study", "BasinsResult", "AnalysisStatus", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
+           "basins_study", "BasinsResult", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
 
 
 # --- sweep tasks (module level: picklable for process pools and Dask) ------------------
@@ -285,7 +284,7 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
                  protocols: Path | None = None, v1_range: str | None = None,
                  v2_range: str | None = None, lam: float | None = None, seed: int = 0,
                  workers: int | None = None, scheduler=None, resume: bool = False,
-                 progress: bool = True, stop_after: int | None = None) -> AnalysisStatus:
+                 progress: bool = True, stop_after: int | None = None) -> StudyStatus:
     """Steady state (class, dissipation per cycle) of a discrete case over initial conditions.
 
     At most one of ``grid``, ``random``, ``protocols`` (default: a 101 × 101 grid for
@@ -312,7 +311,7 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
 
     Returns
     -------
-    AnalysisStatus
+    StudyStatus
         ``result`` (:class:`BasinsResult`) and ``outputs`` (``result.to_outputs()``) once
         every cell is done, None while cells are missing: ``summary`` (``mode``, ``lam``,
         ``lambda1``, ``lambda2``, ``starts``, ``class_counts``, ``dissipation_per_cycle``
@@ -403,7 +402,7 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
     wall = time.perf_counter() - t0
     done = store.done()
     if not done.all():
-        return AnalysisStatus(None, int(done.sum()), int(done.size))
+        return StudyStatus(None, int(done.sum()), int(done.size))
     data = store.read()
     if mode == "grid":  # (block, row, v1, ...) -> (v2, v1, ...), padding rows dropped
         data = {k: v.reshape((-1,) + v.shape[2:])[:grid] for k, v in data.items()}
@@ -420,12 +419,7 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
     result = BasinsResult(wall_time_s=wall, mode=mode, lam=lam, n_nodes=n, lambda1=l1,
                           lambda2=l2, data=data, store=None if mode == "grid" else store,
                           axes=tuple(axes), **grid_kw)
-    return AnalysisStatus(result.to_outputs(), int(done.size), int(done.size), result)
-
-
-#: the status of a resumable analysis (:class:`~slipcycle.sweep.dataset.StudyStatus`, its
-#: ``result`` set once every cell is done)
-AnalysisStatus = StudyStatus
+    return StudyStatus(result.to_outputs(), int(done.size), int(done.size), result)
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
@@ -446,7 +440,7 @@ class BasinsResult(StudyResult):
         Shakedown load factors of the case's own load (Barber 2012) [1].
     data : dict of str to ndarray
         The stored outputs over the starts: ``steady_state`` (class codes of
-        :data:`~slipcycle.discrete.steady.STEADY_CODES`), ``dissipation_per_cycle`` [J],
+        :data:`~slipcycle.result.STEADY_STATES`), ``dissipation_per_cycle`` [J],
         ``dissipation_per_node`` [J] (last axis: node), ``cycles_run``, ``n_slipping``,
         ``memory_erased``; shape (v2, v1) for a grid, (start,) otherwise.
     store : SweepStore or None
@@ -481,14 +475,14 @@ class BasinsResult(StudyResult):
 
     @property
     def steady_state(self) -> np.ndarray:
-        """Class codes over the starts (:data:`~slipcycle.discrete.steady.STEADY_CODES`)."""
+        """Class codes over the starts (:data:`~slipcycle.result.STEADY_STATES`)."""
         return self.data["steady_state"]
 
     @property
     def class_counts(self) -> dict[str, int]:
         """Number of starts per steady-state class."""
         cls = self.steady_state
-        return {STEADY_CODES[c]: int((cls == c).sum()) for c in np.unique(cls)}
+        return {STEADY_STATES[c]: int((cls == c).sum()) for c in np.unique(cls)}
 
     def headline(self) -> list[tuple]:
         """Mode, λ, starts, class counts, whether both outcomes occur, λ1, λ2."""
@@ -521,7 +515,7 @@ class BasinsResult(StudyResult):
                        "min": float(np.nanmin(D[adm])) if adm.any() else None,
                        "max": float(np.nanmax(D[adm])) if adm.any() else None},
                    "both_outcomes": bool((cls == 0).any() and (cls == 1).any()),
-                   "steady_state_codes": list(STEADY_CODES), "wall_time_s": self.wall_time_s,
+                   "steady_state_codes": list(STEADY_STATES), "wall_time_s": self.wall_time_s,
                    "units": dict(SUMMARY_UNITS)}
         if self.mode == "grid":
             summary["boundary_box_counting_dimension"] = self.box_counting["dimension"]
@@ -541,13 +535,13 @@ class BasinsResult(StudyResult):
         """
         cls = self.steady_state
         # reached a steady state (shakedown, cyclic slip or ratcheting) within run.cycles
-        converged = np.isin(cls, [STEADY_CODES.index(c) for c in
+        converged = np.isin(cls, [STEADY_STATES.index(c) for c in
                                   ("shakedown", "cyclic_slip", "ratcheting")])
-        codes = list(range(len(STEADY_CODES)))
+        codes = list(range(len(STEADY_STATES)))
         if self.mode != "grid":
             ds = store_dataset(self.store, self.axes, attrs={
                 "steady_state": {"units": "1", "flag_values": codes,
-                                 "flag_meanings": " ".join(STEADY_CODES)},
+                                 "flag_meanings": " ".join(STEADY_STATES)},
                 "dissipation_per_cycle": {"units": "J"},
                 "dissipation_per_node": {"units": "J"},
                 "cycles_run": {"units": "1"}, "n_slipping": {"units": "1"},
@@ -557,7 +551,7 @@ class BasinsResult(StudyResult):
         d, g = self.data, ("v2", "v1")
         return xr.Dataset(
             {"steady_state": (g, cls, {"units": "1", "flag_values": codes,
-                                       "flag_meanings": " ".join(STEADY_CODES)}),
+                                       "flag_meanings": " ".join(STEADY_STATES)}),
              "dissipation_per_cycle": (g, d["dissipation_per_cycle"], {"units": "J"}),
              "dissipation_per_node": (g + ("node",), d["dissipation_per_node"],
                                       {"units": "J"}),

@@ -9,8 +9,8 @@ through the sweep engine (:func:`slipcycle.sweep.run_sweep`: a Zarr store, ``--r
 random initial slips admissible at θ = 0 (:func:`~slipcycle.discrete3d.basins.random_starts`,
 in a box of half-width :func:`start_scale`) or assembly protocols (:func:`read_protocols3d`).
 
-Class codes are :data:`STEADY_CODES`, the order of the 2-D model's codes:
-0 shakedown, 1 cyclic_slip, 2 ratcheting, 3 not_converged, 4 inadmissible, 5 failed.
+Class codes are the positions in :data:`slipcycle.result.STEADY_STATES` (:data:`STEADY_CODES`),
+as in every store of the project.
 """
 
 from __future__ import annotations
@@ -30,25 +30,22 @@ from slipcycle.discrete3d.basins import distinct_values, random_starts
 from slipcycle.discrete3d.case import read_discrete3d_case
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
-from slipcycle.discrete3d.steady import (
-    STEADY_CLASSES,
-    InadmissibleInitialState3D,
-    simulate3d,
-)
+from slipcycle.discrete3d.steady import InadmissibleInitialState3D, simulate3d
 from slipcycle.errors import SolverError
 from slipcycle.io import Case, CaseError
 from slipcycle.io.case import Section, parse_case_text
 from slipcycle.loading.nodal import force_scale
 from slipcycle.plot.interface3d import basin_dissipation
-from slipcycle.result import StudyResult
+from slipcycle.result import STEADY_STATES, StudyResult
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
 __all__ = ["STEADY_CODES", "Basins3DResult", "basins3d_study",
            "read_protocols3d", "run_record3d", "start_scale", "load_discrete3d_case"]
 
-#: class codes of the study's ``steady_state`` (same order as the 2-D model's)
-STEADY_CODES = STEADY_CLASSES + ("inadmissible", "failed")
+#: class codes of the study's ``steady_state``: the one list of steady-state words,
+#: :data:`slipcycle.result.STEADY_STATES` (the codes of the 2-D studies too)
+STEADY_CODES = STEADY_STATES
 
 #: fraction of the displacement scale F/k (largest load over the largest stiffness) that
 #: bounds each random initial slip component

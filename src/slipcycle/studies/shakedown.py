@@ -41,14 +41,14 @@ from slipcycle.discrete.shakedown import (
     simulation_brackets,
 )
 from slipcycle.discrete.sizes import cells_bytes, check_memory
-from slipcycle.discrete.steady import STEADY_CODES, simulate
+from slipcycle.discrete.steady import simulate
 from slipcycle.io import Case, CaseError
 from slipcycle.plot import shakedown as plots
-from slipcycle.result import StudyResult
-from slipcycle.studies.basins import AnalysisStatus, lam_start_task, load_discrete_case
+from slipcycle.result import STEADY_STATES, StudyResult
+from slipcycle.studies.basins import lam_start_task, load_discrete_case
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.core import TaskRunner, fingerprint
-from slipcycle.sweep.dataset import as_case_error
+from slipcycle.sweep.dataset import StudyStatus, as_case_error
 
 __all__ = ["shakedown_study", "ShakedownResult", "check_sizes", "TrialRuns", "SUMMARY_UNITS",
            "SUMMARY_FLAGS"]
@@ -111,7 +111,7 @@ def _panels(dc, region, l1, l2, lam_case, seed):
 def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points: int = 21,
                     starts: int = 8, seed: int = 0, tol: float = 1e-9, lam_tol: float = 1e-3,
                     workers: int | None = None, scheduler=None, resume: bool = False,
-                    progress: bool = True, stop_after: int | None = None) -> AnalysisStatus:
+                    progress: bool = True, stop_after: int | None = None) -> StudyStatus:
     """Safe region, λ1, λ2 and refined λ3/λ4 brackets of a discrete case.
 
     Parameters
@@ -139,7 +139,7 @@ def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points
 
     Returns
     -------
-    AnalysisStatus
+    StudyStatus
         ``result`` (:class:`ShakedownResult`) and ``outputs`` (``result.to_outputs()``)
         once the scan is complete: ``summary`` (``lambda1``, ``lambda2``,
         ``lambda3_bracket``, ``lambda4_bracket`` refined, the grid brackets, the extreme
@@ -199,13 +199,13 @@ def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points
             raise as_case_error(exc) from None
         done = store.done()
         if not done.all():
-            return AnalysisStatus(None, int(done.sum()), int(done.size))
+            return StudyStatus(None, int(done.sum()), int(done.size))
         data = store.read()
         cls = data["steady_state"]
         recs = []
         for i, lam in enumerate(lams):
             for s in range(starts + 1):
-                if cls[i, s] == STEADY_CODES.index("inadmissible"):
+                if cls[i, s] == STEADY_STATES.index("inadmissible"):
                     continue
                 recs.append((lam, _label(s), _record({k: v[i, s] for k, v in data.items()})))
         br = simulation_brackets(recs, n)
@@ -231,7 +231,7 @@ def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points
         lambda4_grid_bracket=tuple(br.lambda4_bracket),
         redundant_above_lambda1=tuple(names[k] for k in l1info["redundant_above"]),
         region=region, last_safe_state=v_last, lam=lam_case, regime=regime,
-        steady_state=STEADY_CODES[int(own["steady_state"])],
+        steady_state=STEADY_STATES[int(own["steady_state"])],
         dissipation_per_cycle=float(own["dissipation_per_cycle"]),
         evidence=dict(ref.evidence),
         refinement={
@@ -244,7 +244,7 @@ def shakedown_study(case: Case, out, *, lam_max: float | None = None, lam_points
         scan_lam=np.array(lams), seed=seed, scan_store=str(out / "scan.zarr"), scan=data,
         trial_lam=np.array(trial_lams), trials=trials.arrays(trial_lams, n),
         linear_programs=l1info["lps"] + 1, lp_wall_time_s=t_lp, discrete_case=dc)
-    return AnalysisStatus(result.to_outputs(), int(done.size), int(done.size), result)
+    return StudyStatus(result.to_outputs(), int(done.size), int(done.size), result)
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
@@ -288,7 +288,7 @@ class ShakedownResult(StudyResult):
         λ values of the scan [1]; ``seed`` of its random starts; ``scan_store`` its path.
     scan : dict of str to ndarray
         Stored scan outputs over (lam, start): ``steady_state`` codes
-        (:data:`~slipcycle.discrete.steady.STEADY_CODES`), ``dissipation_per_cycle`` [J],
+        (:data:`~slipcycle.result.STEADY_STATES`), ``dissipation_per_cycle`` [J],
         ``dissipation_per_node`` [J] (last axis node), ``n_slipping``, ``memory_erased``,
         ``initial_slip`` [m].
     trial_lam : ndarray, shape (T,)
@@ -374,7 +374,7 @@ class ShakedownResult(StudyResult):
             "refinement": dict(self.refinement),
             "scan": {"lam": self.scan_lam.tolist(), "starts": int(cls.shape[1]),
                      "seed": self.seed, "store": self.scan_store,
-                     "class_counts": {STEADY_CODES[c]: int((cls == c).sum())
+                     "class_counts": {STEADY_STATES[c]: int((cls == c).sum())
                                       for c in np.unique(cls)}},
             "linear_programs": self.linear_programs, "lp_wall_time_s": self.lp_wall_time_s,
             "units": dict(SUMMARY_UNITS),
@@ -397,7 +397,7 @@ class ShakedownResult(StudyResult):
         cls = data["steady_state"]
         ds = xr.Dataset(
             {"steady_state": (("lam", "start"), cls, {
-                "units": "1", "flag_meanings": " ".join(STEADY_CODES)}),
+                "units": "1", "flag_meanings": " ".join(STEADY_STATES)}),
              "dissipation_per_cycle": (("lam", "start"), data["dissipation_per_cycle"],
                                        {"units": "J"}),
              "dissipation_per_node": (("lam", "start", "node"), data["dissipation_per_node"],
@@ -417,7 +417,7 @@ class ShakedownResult(StudyResult):
             trial, tdims = self.trials, ("trial_lam", "start")
             ds = ds.assign_coords(trial_lam=("trial_lam", self.trial_lam, {"units": "1"}))
             ds["trial_steady_state"] = (tdims, trial["steady_state"], {
-                "units": "1", "flag_meanings": " ".join(STEADY_CODES)})
+                "units": "1", "flag_meanings": " ".join(STEADY_STATES)})
             ds["trial_dissipation_per_cycle"] = (tdims, trial["dissipation_per_cycle"],
                                                  {"units": "J"})
             ds["trial_n_slipping"] = (tdims, trial["n_slipping"], {"units": "1"})
@@ -473,7 +473,7 @@ def _label(s: int) -> str:
 
 def _record(cell: dict) -> dict:
     """A scan cell (codes, NumPy scalars) as a run record for the brackets."""
-    return {"steady_state": STEADY_CODES[int(cell["steady_state"])],
+    return {"steady_state": STEADY_STATES[int(cell["steady_state"])],
             "dissipation_per_cycle": float(cell["dissipation_per_cycle"]),
             "n_slipping": int(cell["n_slipping"]),
             "memory_erased": bool(cell["memory_erased"]),
@@ -544,7 +544,7 @@ class TrialRuns:
                "initial_slip": np.full((T, S, n), np.nan)}
         for i, lam in enumerate(lams):
             for s, r in enumerate(self.cells[repr(lam)]):
-                out["steady_state"][i, s] = STEADY_CODES.index(r["steady_state"])
+                out["steady_state"][i, s] = STEADY_STATES.index(r["steady_state"])
                 out["dissipation_per_cycle"][i, s] = r["dissipation_per_cycle"]
                 out["n_slipping"][i, s] = r["n_slipping"]
                 out["memory_erased"][i, s] = r["memory_erased"]
