@@ -46,6 +46,19 @@ def test_every_plot_function_named_in_the_source_exists():
     assert not missing, f"figure targets that name no plot function: {missing}"
 
 
+def test_no_model_package_imports_plot():
+    """import-linter enforces it (contract models-below-studies); this says where."""
+    offenders = []
+    for pkg in ("discrete", "discrete3d", "halfspace", "rods", "fe"):
+        for path in (SRC / pkg).rglob("*.py"):
+            for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+                if re.match(r"\s*(from slipcycle\.plot\b|from slipcycle import plot\b|"
+                            r"import slipcycle\.plot\b|from matplotlib|import matplotlib)",
+                            line):
+                    offenders.append(f"{pkg}/{path.name}:{n}")
+    assert not offenders, offenders
+
+
 def test_a_task_pickles_and_draws_the_named_function():
     A = np.array([[2.0, -1.0], [-1.0, 2.0]])
     task = figure_task("slipcycle.plot.fe:coupling", A, 0.1 * A, 3.0 * A)
