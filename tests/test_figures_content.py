@@ -309,3 +309,54 @@ def test_lap_joint_bolt_figure_keeps_its_legend_clear_of_the_bars(lap_joint):
     box = legend.get_window_extent(renderer)
     for bar in fig.axes[0].patches:
         assert not box.overlaps(bar.get_window_extent(renderer))
+
+
+# -- two rods -----------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def rods():
+    return slipcycle.run(example_text("rods_microslip"))
+
+
+def test_rods_regularisation_left_panel_has_partial_slip_only_and_explains_each_entry(rods):
+    import re
+
+    reg = rods.analysis["reg"]
+    fig = rods.to_outputs().figures["regularisation"]()
+    ax1, ax2 = fig.axes
+    series = [ln for ln in ax1.get_lines() if len(ln.get_xdata()) > 2]
+    assert series
+    for ln in series:
+        x = np.asarray(ln.get_xdata(), float)
+        assert x.max() < 1.0                 # no gross-slip point stacked at T* = T_g
+        assert np.ptp(np.log(x)) > 0.01      # a curve, not a vertical smear
+    texts = _legend_texts(ax1)
+    assert sorted(texts) == sorted(_labelled_lines(ax1))
+    assert all(":" in t for t in texts), texts           # every entry says what it is
+    iwan = [t for t in texts if t.startswith("iwan")]
+    slope = float(re.search(r"slope ([0-9.]+)", iwan[0])[1])
+    assert slope == pytest.approx(reg["iwan"]["slope_microslip"], abs=0.005)
+    # the models without microslip are named, not drawn as empty series
+    note = " ".join(t.get_text() for t in ax1.texts)
+    for m in ("jenkins", "coulomb"):
+        assert m in note and not any(t.startswith(m) for t in texts)
+    assert sorted(_legend_texts(ax2)) == sorted(_labelled_lines(ax2))
+
+
+def test_rods_time_history_gives_a_constant_normal_force_no_panel_of_its_own(rods):
+    ds = rods.to_dataset()
+    assert np.ptp(ds.N.values) == 0.0
+    fig = rods.to_outputs().figures["time_history"]()
+    (ax,) = fig.axes
+    assert "N = 10000 N (constant)" in ax.get_title()
+
+
+def test_rods_time_history_draws_a_varying_normal_force():
+    text = example_text("rods_microslip").replace("frequency_ratio = 0.3",
+                                                  "frequency_ratio = 0.3\naxial_amplitude = 2e3")
+    result = slipcycle.run(text)
+    fig = result.to_outputs().figures["time_history"]()
+    assert len(fig.axes) == 2
+    (line,) = fig.axes[1].get_lines()
+    np.testing.assert_array_equal(line.get_ydata(), result.to_dataset().N.values)

@@ -61,49 +61,88 @@ def hysteresis(ds) -> Figure:
 
 
 def time_history(ds) -> Figure:
-    """Interface torque over the steady cycle, dynamic and quasi-static, and N(t)."""
-    fig = Figure(figsize=(6, 4.5))
-    ax, ax2 = fig.subplots(2, 1, sharex=True)
+    """Interface torque over the steady cycle, dynamic and quasi-static, and N(t).
+
+    A constant normal force (no axial excitation) gets no panel of its own: its value is
+    given in the title; a varying one is drawn below the torque.
+    """
     t = ds.time.values / ds.time.values[-1]
+    N = np.asarray(ds.N.values, float)
+    constant = bool(np.ptp(N) <= 1e-12 * max(float(np.max(np.abs(N))), 1e-300))
+    fig = Figure(figsize=(6, 3.2 if constant else 4.5))
+    ax, ax2 = (fig.subplots(), None) if constant else fig.subplots(2, 1, sharex=True)
     ax.plot(t, ds.T_dyn, label="dynamic")
     ax.plot(t, ds.T_qs, ls="--", color="0.4", label="quasi-static")
     ax.set_ylabel("T [N m]")
     ax.legend()
     ax.grid(alpha=0.3)
-    ax2.plot(t, ds.N, color="C2")
-    _floor_range(ax2, ds.N.values)
-    ax2.ticklabel_format(axis="y", useOffset=False)
-    ax2.set_ylabel("N [N]")
-    ax2.set_xlabel("t / period")
-    ax2.grid(alpha=0.3)
+    if constant:
+        ax.set_title(f"interface torque; normal force N = {N[0]:.6g} N (constant)",
+                     fontsize=10)
+        ax.set_xlabel("t / period")
+    else:
+        ax2.plot(t, N, color="C2")
+        _floor_range(ax2, N)
+        ax2.ticklabel_format(axis="y", useOffset=False)
+        ax2.set_ylabel("N [N]")
+        ax2.set_xlabel("t / period")
+        ax2.grid(alpha=0.3)
     fig.tight_layout()
     return fig
 
 
+#: the markers of the interface models in :func:`regularisation`
+_REG_STYLES = (("distributed", "-o", "C0"), ("jenkins", "-s", "C1"), ("coulomb", "-^", "C2"),
+               ("iwan", "-d", "C3"))
+
+
 def regularisation(reg: dict) -> Figure:
-    """Quasi-static dissipation per cycle versus amplitude, log–log, per interface model."""
-    fig = Figure(figsize=(10, 4.2))
+    """Quasi-static dissipation per cycle versus amplitude, log–log, per interface model.
+
+    Left: partial slip only, the drive amplitudes Θa < Θg (beyond, T* = T_g for every
+    amplitude: the gross-slip points would stack on one vertical line); a model that
+    dissipates nothing below T_g (Jenkins, Coulomb: stick, then gross slip) is said so,
+    not drawn. The legend gives each model's log–log slope d log D / d log T* (fitted
+    over T* < 0.95 T_g, :func:`slipcycle.rods.regularisation.regularisation_study`); the
+    rings have no power law (D ∝ (T* − T_s)² past the rim's threshold T_s = ¾ T_g), so
+    theirs is not quoted as one. Right: every amplitude, with the slope d log D / d log Θa
+    over the largest amplitudes (→ 1 in gross slip, where the models coincide).
+    """
+    fig = Figure(figsize=(11, 4.4))
     ax1, ax2 = fig.subplots(1, 2)
-    for m, style in (("distributed", "-o"), ("jenkins", "-s"), ("coulomb", "-^"),
-                     ("iwan", "-d")):
+    none_below = []
+    below = np.asarray(reg["amplitude"]) / reg["theta_gross"] < 1.0
+    for m, style, color in _REG_STYLES:
         r = reg[m]
-        ok = r["dissipation"] > 0
+        D, T = np.asarray(r["dissipation"]), np.asarray(r["T_amp"]) / reg["gross_slip_torque"]
+        ok = D > 0
+        partial = ok & below
         s = r["slope_microslip"]
-        lab = f"{m} (micro {s:.2f})" if s is not None else f"{m} (no microslip)"
-        ax1.loglog(r["T_amp"][ok] / reg["gross_slip_torque"], r["dissipation"][ok], style,
-                   ms=3, label=lab)
+        if not partial.any():
+            none_below.append(m)
+        elif m == "distributed":
+            ax1.loglog(T[partial], D[partial], style, ms=3, color=color,
+                       label=f"{m}: D ∝ (T* − T_s)², no power law")
+        else:
+            slope = f"log–log slope {s:.2f}" if s is not None else "too few points to fit"
+            ax1.loglog(T[partial], D[partial], style, ms=3, color=color,
+                       label=f"{m}: {slope}")
         sm = r["slope_macroslip"]
-        ax2.loglog(reg["amplitude"][ok] / reg["theta_gross"], r["dissipation"][ok], style,
-                   ms=3, label=f"{m} (macro {sm:.2f})" if sm is not None else m)
-    ax1.axvline(0.75, color="0.6", lw=0.8, ls=":")
+        ax2.loglog(reg["amplitude"][ok] / reg["theta_gross"], D[ok], style, ms=3, color=color,
+                   label=f"{m}: slope {sm:.2f} at large Θa" if sm is not None else m)
+    ax1.axvline(0.75, color="0.6", lw=0.8, ls=":", label="rim slips: T_s = ¾ T_g")
+    if none_below:
+        ax1.text(0.02, 0.02, f"{', '.join(none_below)}: no dissipation below T_g\n"
+                 "(stick, then gross slip)", transform=ax1.transAxes, fontsize=7,
+                 va="bottom")
     ax1.set_xlabel("torque amplitude T* / T_g")
     ax1.set_ylabel("dissipation per cycle [J]")
-    ax1.set_title("partial slip (rim slips at T*/T_g = 3/4)")
+    ax1.set_title("partial slip (Θa < Θg)")
     ax2.set_xlabel("drive amplitude Θa / Θg")
-    ax2.set_title("up to gross slip")
+    ax2.set_title("every amplitude (the models coincide in gross slip)")
     for a in (ax1, ax2):
         a.grid(alpha=0.3, which="both")
-        a.legend(fontsize=7)
+        a.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
     return fig
 
