@@ -17,6 +17,7 @@ this package, nor the sweep engine, nor the figures (contract ``models-below-stu
 - :mod:`~slipcycle.studies.limits`      limit frequency of the quasi-static analysis of
   two rods and its regime maps (``slipcycle limits``; the analysis is
   :mod:`slipcycle.rods.limits`)
+- :mod:`~slipcycle.studies.common`      the case of a sweep task, assembly protocol files
 - :mod:`~slipcycle.studies.case_sweep`  sweeps over the keys of any case
   (``slipcycle sweep``)
 """

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import functools
 import time
-import tomllib
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -46,9 +45,9 @@ from slipcycle.discrete.shakedown import (
 )
 from slipcycle.discrete.sizes import cells_bytes, check_memory
 from slipcycle.io import Case, CaseError
-from slipcycle.io.case import Section, parse_case_text
 from slipcycle.plot.shakedown import basin_map
 from slipcycle.result import STEADY_STATES, StudyResult
+from slipcycle.studies.common import model_case, read_protocols
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
@@ -62,10 +61,8 @@ __all__ = ["load_discrete_case", "basin_row_task", "basin_block_task", "grid_blo
 def load_discrete_case(case_text: str, case_path: str | None):
     """The validated :class:`~slipcycle.discrete.case.DiscreteCase` of a case text
     (cached per process). Tables other than the model's (e.g. ``[basins]``) are ignored."""
-    base = parse_case_text(case_text, Path(case_path) if case_path else None)
-    data = {k: v for k, v in base.data.items()
-            if k in ("model", "title", "description", "discrete", "loading", "run")}
-    return read_discrete_case(Case(base.model, data, case_text, base.path), record=False)
+    return read_discrete_case(model_case(case_text, case_path, (
+        "model", "title", "description", "discrete", "loading", "run")), record=False)
 
 
 def basin_row_task(params: dict, case_text: str, case_path, v1: tuple, v2: tuple,
@@ -218,48 +215,6 @@ def parse_range(text: str, key: str) -> tuple[float, float]:
     if not (np.isfinite(a) and np.isfinite(b) and b > a):
         raise CaseError(key, f"needs finite a < b, got {text!r}")
     return a, b
-
-
-def read_protocols(path: Path, n: int) -> list[np.ndarray]:
-    """Assembly protocols of an N-node system from a TOML file.
-
-    Parameters
-    ----------
-    path : Path
-        TOML file of ``[[protocol]]`` tables, each with ``p_w`` and optional ``q_w``: lists
-        of load states, (S, N) nested lists [N], visited before cycling.
-    n : int
-        Number of nodes N.
-
-    Returns
-    -------
-    list of (S, 2N) arrays
-        Each protocol as rows [q_w, p_w] [N].
-
-    Raises
-    ------
-    CaseError
-        Naming ``--protocols`` (unreadable file, not TOML) or the offending key.
-    """
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise CaseError("--protocols", f"cannot read {path}: {exc.strerror}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise CaseError("--protocols", f"not valid TOML: {exc}") from None
-    root = Section(data, "", path.parent)
-    out = []
-    for ps in root.tables("protocol"):
-        p = ps.array("p_w", shape=(None, n))
-        q = ps.array("q_w", np.zeros_like(p), shape=(p.shape[0], n))
-        ps.finish()
-        out.append(np.hstack([q, p]))
-    root.finish()
-    if not out:
-        raise CaseError("protocol", "the protocols file holds no [[protocol]] tables")
-    return out
 
 
 def protocol_task(params, case_text, case_path, protocols, lam):

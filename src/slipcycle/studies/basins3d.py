@@ -7,7 +7,8 @@ through the sweep engine (:func:`slipcycle.sweep.run_sweep`: a Zarr store, ``--r
 ``--workers``): every start is one cell, run to its steady state by
 :func:`~slipcycle.discrete3d.steady.simulate3d`, the one engine of the model. Starts are
 random initial slips admissible at θ = 0 (:func:`~slipcycle.discrete3d.basins.random_starts`,
-in a box of half-width :func:`start_scale`) or assembly protocols (:func:`read_protocols3d`).
+in a box of half-width :func:`start_scale`) or assembly protocols
+(:func:`~slipcycle.studies.common.read_protocols`).
 
 Class codes are the positions in :data:`slipcycle.result.STEADY_STATES` (:data:`STEADY_CODES`),
 as in every store of the project.
@@ -17,7 +18,6 @@ from __future__ import annotations
 
 import functools
 import time
-import tomllib
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -33,15 +33,15 @@ from slipcycle.discrete3d.model import FrictionalSystem3D
 from slipcycle.discrete3d.steady import InadmissibleInitialState3D, simulate3d
 from slipcycle.errors import SolverError
 from slipcycle.io import Case, CaseError
-from slipcycle.io.case import Section, parse_case_text
 from slipcycle.loading.nodal import force_scale
 from slipcycle.plot.interface3d import basin_dissipation
 from slipcycle.result import STEADY_STATES, StudyResult
+from slipcycle.studies.common import model_case, read_protocols
 from slipcycle.sweep import Axis, SweepError, run_sweep
 from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
 __all__ = ["STEADY_CODES", "Basins3DResult", "basins3d_study",
-           "read_protocols3d", "run_record3d", "start_scale", "load_discrete3d_case"]
+           "run_record3d", "start_scale", "load_discrete3d_case"]
 
 #: class codes of the study's ``steady_state``: the one list of steady-state words,
 #: :data:`slipcycle.result.STEADY_STATES` (the codes of the 2-D studies too)
@@ -115,59 +115,13 @@ def start_scale(system: FrictionalSystem3D, load: Load3D, steps_per_cycle: int) 
     return START_SCALE * force_scale(vals) / system.stiffness_scale()
 
 
-def read_protocols3d(path: Path, n: int) -> list[np.ndarray]:
-    """Assembly protocols of an N-node 3-D system from a TOML file.
-
-    Parameters
-    ----------
-    path : Path
-        TOML file of ``[[protocol]]`` tables, each with ``p_w`` ((S, N) nested list [N])
-        and optional ``q_w`` ((S, N, 2): the (t1, t2) pair of every node [N]), the load
-        states visited before cycling.
-    n : int
-        Number of nodes N.
-
-    Returns
-    -------
-    list of (S, 3N) arrays
-        Each protocol as rows [q^w (node-major pairs), p^w] [N].
-
-    Raises
-    ------
-    CaseError
-        Naming ``--protocols`` (unreadable file, not TOML) or the offending key.
-    """
-    try:
-        text = Path(path).read_text()
-    except OSError as exc:
-        raise CaseError("--protocols", f"cannot read {path}: {exc.strerror}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise CaseError("--protocols", f"not valid TOML: {exc}") from None
-    root = Section(data, "", Path(path).parent)
-    out = []
-    for ps in root.tables("protocol"):
-        p = ps.array("p_w", shape=(None, n))
-        q = ps.array("q_w", np.zeros((p.shape[0], n, 2)), shape=(p.shape[0], n, 2))
-        ps.finish()
-        out.append(np.hstack([q.reshape(p.shape[0], 2 * n), p]))
-    root.finish()
-    if not out:
-        raise CaseError("protocol", "the protocols file holds no [[protocol]] tables")
-    return out
-
-
 # --- sweep tasks (module level: picklable for process pools and Dask) ------------------
 @functools.lru_cache(maxsize=8)
 def load_discrete3d_case(case_text: str, case_path: str | None):
     """The validated :class:`~slipcycle.discrete3d.case.Discrete3DCase` of a case text
     (cached per process). Tables other than the model's (e.g. ``[basins]``) are ignored."""
-    base = parse_case_text(case_text, Path(case_path) if case_path else None)
-    data = {k: v for k, v in base.data.items()
-            if k in ("model", "title", "description", "discrete3d", "loading", "run",
-                     "output")}
-    return read_discrete3d_case(Case(base.model, data, case_text, base.path))
+    return read_discrete3d_case(model_case(case_text, case_path, (
+        "model", "title", "description", "discrete3d", "loading", "run", "output")))
 
 
 def _run(dc) -> dict:
@@ -211,7 +165,7 @@ def basins3d_study(case: Case, out, *, grid: int | None = None, random: int | No
         Random initial slips admissible at θ = 0, each component uniform in
         ±:func:`start_scale` (``seed``).
     protocols : Path, optional
-        TOML file of assembly protocols (:func:`read_protocols3d`).
+        TOML file of assembly protocols (:func:`~slipcycle.studies.common.read_protocols`).
     lam : float, optional
         Load factor λ (default the case's ``loading.lam``).
     workers, scheduler, resume, progress, stop_after
@@ -258,7 +212,7 @@ def basins3d_study(case: Case, out, *, grid: int | None = None, random: int | No
         desc = {"mode": mode, "lam": lam, "V": V.tolist()}
     else:
         mode = "protocols"
-        protos = read_protocols3d(protocols, n)
+        protos = read_protocols(protocols, n, pairs=True)
         fn = partial(protocol_task, case_text=case.text, case_path=cpath,
                      protocols=tuple(p.tolist() for p in protos), lam=lam)
         axes = [Axis("index", tuple(range(len(protos))))]
