@@ -104,6 +104,8 @@ MODELS: dict[str, ModelEntry] = {
         model_solver="slipcycle.joints.lap_joint_case:solve_model",
         model_types=("slipcycle.joints.lap_joint_case:LapJointCase",),
         result="slipcycle.joints.lap_joint_study:LapJointResult"),
+    # an FE code's export and its mesh -> a discrete3d case (slipcycle.fe_import)
+    "fe_import": ModelEntry(None, None, ("reduce",)),
 }
 
 #: models that ``slipcycle run`` (and ``sweep``) solve -> their ``run_case``

@@ -1,5 +1,9 @@
 """``slipcycle reduce MODEL.toml --out reduced.npz``: static reduction to the contact nodes.
 
+A model file with ``model = "fe_import"`` names the stiffness export(s) of another FE code
+and the mesh; ``--out`` is then a directory, which receives a runnable ``discrete3d``
+case (``case.toml``), its ``stiffness.npz`` and ``report.txt`` (docs/from_fe_code.md).
+
 MODEL may also be a reduced stiffness from another code (``.mtx`` or ``.npz``): it is
 then imported, checked (shapes, symmetric, positive definite) and written in
 slipcycle's ``.npz`` layout. ``--case discrete.toml`` writes a discrete case file that
@@ -17,7 +21,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("reduce", help="reduce a finite-element model (or import reduced "
                        "matrices) to A, B, C and p^w, q^w in an .npz file", description=__doc__)
     p.add_argument("model", type=Path, help="model file (TOML, model = \"fe\") or .mtx/.npz")
-    p.add_argument("--out", type=Path, required=True, help="output .npz file")
+    p.add_argument("--out", type=Path, required=True,
+                   help="output .npz file (a directory for an fe_import model file)")
     p.add_argument("--dof-order", choices=("tangential_first", "interleaved"), default=None,
                    help="ordering of the DOFs of an imported full K, if the file does not "
                         "state it (default tangential_first)")
@@ -28,9 +33,21 @@ def add_parser(sub) -> None:
 
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.fe.files import import_stiffness, reduce_model
+    from slipcycle.fe_import import is_import_model, reduce_import
     from slipcycle.io import CaseError
     from slipcycle.io.results import to_jsonable
 
+    if args.model.suffix.lower() not in (".mtx", ".npz") and is_import_model(args.model):
+        if args.case is not None or args.dof_order is not None:
+            raise CaseError("--case" if args.case is not None else "--dof-order",
+                            "does not apply to an fe_import model file (it writes its "
+                            "case into the --out directory)")
+        info = reduce_import(args.model, args.out)
+        if not args.quiet:
+            print(f"{info['contact_nodes']} contact nodes, load cases "
+                  f"{', '.join(info['load_cases']) or 'none'}; written to {args.out}: "
+                  f"{', '.join(Path(w).name for w in info['written'])}")
+        return 0
     if args.out.suffix.lower() != ".npz":
         raise CaseError("--out", f"must name an .npz file, got {args.out}")
     suffix = args.model.suffix.lower()

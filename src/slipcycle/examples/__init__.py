@@ -25,7 +25,7 @@ __all__ = ["list_examples", "example_path", "example_text", "example_summary",
 
 
 #: data files shipped beside the cases (package-data in pyproject.toml)
-_DATA_SUFFIXES = ("nc", "csv")
+_DATA_SUFFIXES = ("nc", "csv", "inp")
 
 
 def _folder():

@@ -1,0 +1,85 @@
+"""Writing an imported joint: a runnable ``discrete3d`` case, its stiffness file, a report.
+
+``slipcycle reduce MODEL.toml --out DIR`` with ``model = "fe_import"`` writes, all or
+nothing (:func:`slipcycle.io.results.write_together`):
+
+- ``DIR/stiffness.npz``: A, B, C (N/m), the load cases (reactions with the contact held,
+  N), node coordinates (m) and frames, and the provenance (the model file's text);
+- ``DIR/case.toml``: the ``discrete3d`` case (docs/discrete3d.md) naming it, with the
+  tributary ``area`` of each node (m²) and one ``[[loading.load_case]]`` per load case with
+  the time function of ``[fe_import.discrete]``;
+- ``DIR/report.txt``: what was read and checked (JSON).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from slipcycle.fe.files import _savez, _stiffness_arrays
+from slipcycle.fe.model import discrete3d_case_text
+from slipcycle.fe_import.joint import ImportedJoint, import_joint
+from slipcycle.fe_import.model import MODEL, ImportModel, read_import_model
+from slipcycle.io.case import CaseError, read_text_file
+from slipcycle.io.metadata import provenance
+from slipcycle.io.results import write_together
+
+__all__ = ["write_import", "reduce_import", "is_import_model", "OUTPUT_FILES"]
+
+#: the files written into the output directory
+OUTPUT_FILES = ("case.toml", "stiffness.npz", "report.txt")
+
+
+def is_import_model(path: str | Path) -> bool:
+    """True when the TOML file ``path`` says ``model = "fe_import"`` (read as text)."""
+    import tomllib
+
+    try:
+        return tomllib.loads(read_text_file(path)).get("model") == MODEL
+    except (CaseError, tomllib.TOMLDecodeError):
+        return False
+
+
+def write_import(model: ImportModel, joint: ImportedJoint, out: str | Path) -> list[Path]:
+    """Write ``case.toml``, ``stiffness.npz`` and ``report.txt`` into ``out`` (module doc).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise CaseError("--out", f"{out} is a file; give a directory")
+    meta = provenance(model.text, model.path)
+    data = _stiffness_arrays(joint.reduced, meta)
+    text = discrete3d_case_text(model.discrete, joint.reduced, "stiffness.npz", joint.area,
+                                key=f"{MODEL}.discrete")
+    report = json.dumps(joint.report, indent=2, default=str) + "\n"
+    paths = [out / name for name in OUTPUT_FILES]
+    write_together([
+        (paths[0], lambda tmp: tmp.write_text(text, encoding="utf-8")),
+        (paths[1], lambda tmp: _savez(tmp, data)),
+        (paths[2], lambda tmp: tmp.write_text(report, encoding="utf-8")),
+    ])
+    return paths
+
+
+def reduce_import(path: str | Path, out: str | Path) -> dict:
+    """Read the model file ``path``, reduce it and write the case into the directory
+    ``out``: :func:`read_import_model`, :func:`import_joint`, :func:`write_import`.
+
+    Returns
+    -------
+    dict
+        The report, with ``written`` (the files).
+
+    Raises
+    ------
+    CaseError
+        One line naming the key at fault; nothing is written.
+    """
+    model = read_import_model(path)
+    joint = import_joint(model)
+    written = write_import(model, joint, out)
+    return {**joint.report, "written": [str(p) for p in written]}

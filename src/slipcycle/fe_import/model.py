@@ -1,0 +1,153 @@
+"""The model file of an imported joint (``model = "fe_import"``), read and checked.
+
+.. code-block:: toml
+
+    model = "fe_import"
+    [fe_import]
+    tolerance = 1e-9            # m: two bodies' contact nodes match within this distance
+    [[fe_import.body]]          # one body (on a rigid counter-surface) or two
+    stiffness = "block.sti"     # the export (format from the file, or format = "...")
+    mesh = "block.inp"          # the deck, or any mesh meshio reads
+    scale = 1.0                 # mesh coordinates × scale = metres
+    contact = "SBOTTOM"         # a surface (element faces) or a node set on the surface
+    clamped = []                # node sets (or surfaces) held at u = 0 in every case
+    [[fe_import.load]]          # one load case each, named
+    name = "normal"
+    nodes = "TOP"               # a node set of body 1 (body = 2 for the second body) ...
+    displacement = [0, 0, -1e-6]   # m, prescribed motion (held at 0 in the other cases)
+    # or: force = [fx, fy, fz]  N on each node of the set
+    # or: surface = "STOP", pressure = 1e6   Pa, into the body
+    [fe_import.discrete]        # the discrete3d case written: as [fe.discrete]
+    friction = 0.5
+    [fe_import.discrete.amplitude]
+    normal = 1.0
+
+Every mistake is a :class:`~slipcycle.io.CaseError` naming the key.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from slipcycle.fe.model import read_discrete_table
+from slipcycle.io.case import CaseError, Section, read_case
+from slipcycle.io.fe_formats import FORMATS
+
+__all__ = ["BodySpec", "LoadSpec", "ImportModel", "read_import_model", "MODEL"]
+
+MODEL = "fe_import"
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    """One body: its export, its mesh and its named sets (keys for the messages)."""
+
+    stiffness: Path
+    mesh: Path
+    contact: str
+    clamped: tuple = ()
+    scale: float = 1.0
+    format: str | None = None
+    key: str = "fe_import.body[0]"
+
+
+@dataclass(frozen=True)
+class LoadSpec:
+    """One load case: ``kind`` ``displacement`` (m) or ``force`` (N per node) of the node
+    set ``target``, or ``pressure`` (Pa) on the surface ``target``, of body ``body`` (0 or
+    1)."""
+
+    name: str
+    kind: str
+    target: str
+    value: np.ndarray
+    body: int = 0
+    key: str = "fe_import.load[0]"
+
+
+@dataclass(frozen=True, eq=False)
+class ImportModel:
+    """A checked model file: bodies, loads, matching tolerance (m), the ``discrete`` table."""
+
+    bodies: tuple
+    loads: tuple
+    tolerance: float
+    discrete: dict
+    text: str = ""
+    path: Path | None = None
+
+
+def _names(sec: Section, key: str) -> tuple:
+    raw = sec.data.get(key, [])
+    sec._used.add(key)
+    if isinstance(raw, str):
+        raw = [raw]
+    if not isinstance(raw, list) or not all(isinstance(s, str) and s for s in raw):
+        raise sec.error(key, f"must be a list of set names, got {raw!r}")
+    return tuple(raw)
+
+
+def _body(b: Section) -> BodySpec:
+    fmt = b.string("format", None, choices=FORMATS) if b.has("format") else None
+    spec = BodySpec(stiffness=b.path("stiffness"), mesh=b.path("mesh"),
+                    contact=b.string("contact"), clamped=_names(b, "clamped"),
+                    scale=b.float("scale", 1.0, gt=0.0), format=fmt, key=b.prefix)
+    b.finish()
+    return spec
+
+
+def _load(sec: Section, n_bodies: int) -> LoadSpec:
+    name = sec.string("name")
+    if not name.isidentifier() or name == "gap":
+        raise sec.error("name", f"must be a plain word (letters, digits, _) other than "
+                        f"'gap', got {name!r}")
+    body = sec.int("body", 1, ge=1, le=n_bodies) - 1
+    kinds = [k for k in ("displacement", "force", "pressure") if sec.has(k)]
+    if len(kinds) != 1:
+        raise sec.error("displacement", "give exactly one of displacement, force (with "
+                        "nodes) or pressure (with surface)")
+    kind = kinds[0]
+    if kind == "pressure":
+        value = np.array(sec.float("pressure"))
+        target = sec.string("surface")
+    else:
+        value = sec.array(kind, shape=(3,))
+        target = sec.string("nodes")
+    if not np.any(value):
+        raise sec.error(kind, "is zero: a load case must load the body")
+    sec.finish()
+    return LoadSpec(name, kind, target, value, body, sec.prefix)
+
+
+def read_import_model(path: str | Path) -> ImportModel:
+    """Read and check an ``fe_import`` model file (module docstring).
+
+    Raises
+    ------
+    CaseError
+        A missing or unknown key, a missing file, a wrong shape, two loads of one name.
+    """
+    case = read_case(path, models=[MODEL])
+    sec = case.section(MODEL)
+    bodies = sec.tables("body")
+    if len(bodies) not in (1, 2):
+        raise sec.error("body", f"give one body (on a rigid counter-surface) or two, got "
+                        f"{len(bodies)}")
+    specs = tuple(_body(b) for b in bodies)
+    loads = tuple(_load(s, len(specs)) for s in sec.tables("load", []))
+    seen = set()
+    for ld in loads:
+        if ld.name in seen:
+            raise CaseError(f"{ld.key}.name", f"a second load case named {ld.name!r}")
+        seen.add(ld.name)
+    tolerance = sec.float("tolerance", 1e-9, gt=0.0)
+    discrete = read_discrete_table(sec)
+    if discrete is None:
+        raise sec.error("discrete", "required table is missing (friction and the time "
+                        "functions of the load cases of the case written)")
+    sec.finish()
+    case.finish()
+    return ImportModel(specs, loads, tolerance, discrete, case.text, case.path)

@@ -1,0 +1,272 @@
+"""``slipcycle reduce MODEL.toml --out DIR`` of an FE code's export (slipcycle.fe_import),
+against real CalculiX output (``ccx``; skipped with the reason where it is absent).
+
+The reference is slipcycle's own reduction of the same mesh: the same nodes, sets and loads
+found from the coordinates (not from the deck), the element stiffness assembled by
+slipcycle (scikit-fem's trilinear hexahedron for C3D8, :mod:`slipcycle.fe.hex8i` for
+C3D8I), condensed by :func:`slipcycle.fe.contact3d.condense_contact_3d`.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from calculix import block_deck, run_ccx  # noqa: E402
+
+import slipcycle  # noqa: E402
+from slipcycle.fe.contact3d import Case3D, condense_contact_3d  # noqa: E402
+from slipcycle.fe.files import _savez, _stiffness_arrays  # noqa: E402
+from slipcycle.fe.model import discrete3d_case_text  # noqa: E402
+from slipcycle.fe_import import import_joint, read_import_model, write_import  # noqa: E402
+
+E, NU, SIZE = 210e9, 0.3, (0.01, 0.01, 0.005)
+#: the mesh of the periodic runs: 49 contact nodes (the sampled critical friction of
+#: discrete3d tries node pairs below about 40 nodes, which takes tens of seconds)
+RUN_MESH = (6, 6, 3)
+
+MODEL = """
+model = "fe_import"
+[[fe_import.body]]
+stiffness = "block.sti"
+mesh = "block.inp"
+contact = "{contact}"
+[[fe_import.load]]
+name = "normal"
+nodes = "TOP"
+displacement = [0, 0, -1e-6]
+[[fe_import.load]]
+name = "tangential"
+nodes = "TOP"
+displacement = [1e-6, 0, 0]
+[[fe_import.load]]
+name = "side"
+nodes = "SIDE"
+force = [2.0, 0.5, -1.0]
+[fe_import.discrete]
+friction = 0.5
+cycles = {cycles}
+steps_per_cycle = 40
+[fe_import.discrete.mean]
+normal = 1.0
+[fe_import.discrete.amplitude]
+tangential = {amplitude}
+"""
+
+
+def _block(tmp: Path, element: str = "C3D8", n=(4, 4, 2), contact: str = "SBOTTOM",
+           cycles: int = 30, amplitude: float = 2.5) -> Path:
+    run_ccx(block_deck(*n, size=SIZE, element=element, E=E, nu=NU), tmp, "block")
+    path = tmp / "model.toml"
+    path.write_text(MODEL.format(contact=contact, cycles=cycles, amplitude=amplitude))
+    return path
+
+
+def _own_reduction(deck: Path, element: str):
+    """slipcycle's reduction of the deck's mesh, sets found from the coordinates."""
+    from skfem import Basis, ElementHex1, ElementVector
+    from skfem.io.meshio import from_meshio
+
+    from slipcycle.fe.assembly import stiffness
+    from slipcycle.fe.hex8i import hex8i_stiffness
+
+    m = meshio.read(deck)                      # node k: label k + 1 in block_deck
+    hexes = m.cells_dict["hexahedron"]
+    xyz = m.points.T.copy()
+    n = xyz.shape[1]
+    dofs = np.arange(3 * n).reshape(n, 3)
+    if element == "C3D8":
+        basis = Basis(from_meshio(meshio.Mesh(m.points, [("hexahedron", hexes)])),
+                      ElementVector(ElementHex1()))
+        assert np.array_equal(basis.nodal_dofs.T, dofs)
+        K = stiffness(basis, E, NU)
+    else:
+        K = hex8i_stiffness(xyz, hexes.T, E, NU)
+    eps = 1e-9
+    bottom = np.flatnonzero(np.abs(xyz[2]) < eps)
+    c = bottom[np.lexsort((xyz[0, bottom], xyz[1, bottom], xyz[2, bottom]))]
+    top = np.abs(xyz[2] - SIZE[2]) < eps
+    side = (np.abs(xyz[0]) < eps) & ~top & (np.abs(xyz[2]) > eps)
+    fixed = np.zeros((n, 3), bool)
+    fixed[top] = True
+    cases = []
+    for name, d in (("normal", (0, 0, -1e-6)), ("tangential", (1e-6, 0, 0))):
+        u = np.zeros((n, 3))
+        u[top] = d
+        cases.append(Case3D(name, "1", displacement=u))
+    f = np.zeros((n, 3))
+    f[side] = (2.0, 0.5, -1.0)
+    cases.append(Case3D("side", "1", force=f))
+    return condense_contact_3d(lambda: (K, element), dofs, xyz,
+                               pairs=np.column_stack([c, np.full(c.size, -1)]),
+                               normals=(0.0, 0.0, -1.0), fixed=fixed, cases=cases)
+
+
+def _rel(a, b) -> float:
+    return float(np.abs(a - b).max() / np.abs(b).max())
+
+
+@pytest.mark.parametrize("element", ["C3D8", "C3D8I"])
+def test_calculix_sti_import_equals_slipcycles_own_reduction(tmp_path, element):
+    joint = import_joint(read_import_model(_block(tmp_path, element)))
+    own = _own_reduction(tmp_path / "block.inp", element)
+    red = joint.reduced
+    for k in "ABC":
+        assert _rel(getattr(red, k), getattr(own, k)) < 1e-10, k
+    for name in ("normal", "tangential", "side"):
+        for part in ("q", "p"):
+            assert _rel(red.loads[name][part], own.loads[name][part]) < 1e-10, (name, part)
+    assert set(red.loads) == {"normal", "tangential", "side"}
+    assert np.allclose(red.coordinates, own.coordinates, rtol=0, atol=1e-15)
+    assert np.allclose(red.normals, [0, 0, -1]) and np.allclose(red.tangents, own.tangents)
+    # tributary areas of a 4 x 4 grid: corners 1/4, edges 1/2, inside 1 element area
+    assert joint.area.sum() == pytest.approx(SIZE[0] * SIZE[1], rel=1e-13)
+    assert joint.area.max() == pytest.approx(SIZE[0] * SIZE[1] / 16, rel=1e-13)
+    assert joint.area.min() == pytest.approx(SIZE[0] * SIZE[1] / 64, rel=1e-13)
+
+
+def test_contact_as_node_set_gives_the_surfaces_reduction(tmp_path):
+    by_surface = import_joint(read_import_model(_block(tmp_path, contact="SBOTTOM")))
+    path = tmp_path / "model.toml"
+    path.write_text(path.read_text().replace('"SBOTTOM"', '"BOTTOM"'))
+    by_nodes = import_joint(read_import_model(path))
+    assert np.array_equal(by_nodes.reduced.A, by_surface.reduced.A)
+    assert np.array_equal(by_nodes.area, by_surface.area)
+
+
+def _own_case_dir(tmp: Path, model_path: Path, own) -> Path:
+    """The discrete3d case of the own reduction, with the import's [discrete] table."""
+    model = read_import_model(model_path)
+    area = import_joint(model).area
+    d = tmp / "own"
+    d.mkdir()
+    _savez(d / "stiffness.npz", _stiffness_arrays(own, {}))
+    (d / "case.toml").write_text(discrete3d_case_text(model.discrete, own, "stiffness.npz",
+                                                      area, key="fe_import.discrete"))
+    return d / "case.toml"
+
+
+def test_periodic_run_of_import_and_own_reduction_agree(tmp_path):
+    path = _block(tmp_path, n=RUN_MESH, cycles=30, amplitude=2.5)
+    model = read_import_model(path)
+    write_import(model, import_joint(model), tmp_path / "imported")
+    own_case = _own_case_dir(tmp_path, path, _own_reduction(tmp_path / "block.inp", "C3D8"))
+    a = slipcycle.run(tmp_path / "imported" / "case.toml")
+    b = slipcycle.run(own_case)
+    assert a.steady_state == b.steady_state == "cyclic_slip"
+    assert a.cycles_run == b.cycles_run
+    assert a.dissipation_per_cycle > 0
+    assert a.dissipation_per_cycle == pytest.approx(b.dissipation_per_cycle, rel=1e-8)
+
+
+def test_reduce_then_run_writes_fields_at_the_nodes_with_their_areas(tmp_path, run_cli):
+    path = _block(tmp_path, n=RUN_MESH, cycles=30, amplitude=2.5)
+    code, out, err = run_cli("reduce", path, "--out", tmp_path / "case")
+    assert code == 0 and err == "" and "49 contact nodes" in out
+    assert sorted(p.name for p in (tmp_path / "case").iterdir()) == [
+        "case.toml", "report.txt", "stiffness.npz"]
+    report = json.loads((tmp_path / "case" / "report.txt").read_text())
+    assert report["contact_nodes"] == 49 and report["bodies"][0]["format"] == "calculix"
+    code, out, err = run_cli("-q", "run", tmp_path / "case" / "case.toml", "--out",
+                             tmp_path / "run")
+    assert code == 0, err
+    joint = import_joint(read_import_model(path))
+    vtu = sorted((tmp_path / "run" / "fields").glob("interface_*.vtu"))
+    assert vtu
+    m = meshio.read(vtu[-1])
+    assert np.allclose(m.points, joint.reduced.coordinates, rtol=0, atol=1e-15)
+    D = m.point_data["dissipation"]
+    assert D.sum() > 0
+    np.testing.assert_allclose(m.point_data["dissipation_per_area"] * joint.area, D,
+                               rtol=1e-12, atol=1e-30)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["dissipation_per_cycle"] == pytest.approx(D.sum(), rel=1e-9)
+
+
+# -- every mistake in a model file: one line naming the key, exit 2, nothing written -----------
+
+def _mistake(tmp_path, run_cli, edit) -> str:
+    path = _block(tmp_path)
+    text = edit(path.read_text(), tmp_path)
+    path.write_text(text)
+    code, out, err = run_cli("reduce", path, "--out", tmp_path / "out")
+    assert code == 2, (code, out, err)
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
+    return err
+
+
+def test_missing_set_names_the_key(tmp_path, run_cli):
+    err = _mistake(tmp_path, run_cli, lambda t, _: t.replace('"TOP"\ndisplacement = [0',
+                                                              '"TOPP"\ndisplacement = [0'))
+    assert "fe_import.load[0].nodes" in err and "'TOPP'" in err and "TOP" in err
+
+
+def test_contact_set_not_on_the_surface_is_refused(tmp_path, run_cli):
+    def edit(t, tmp):
+        deck = tmp / "block.inp"
+        deck.write_text(deck.read_text().replace("*MATERIAL", "*NSET, NSET=MIXED\n1, 2, 40\n"
+                                                 "*MATERIAL"))
+        return t.replace('contact = "SBOTTOM"', 'contact = "MIXED"')
+
+    err = _mistake(tmp_path, run_cli, edit)
+    assert "fe_import.body[0].contact" in err and "not on a face" in err
+
+
+def test_load_on_a_contact_node_is_refused(tmp_path, run_cli):
+    err = _mistake(tmp_path, run_cli, lambda t, _: t.replace('nodes = "SIDE"',
+                                                              'nodes = "BOTTOM"'))
+    assert "fe_import.load[2].nodes" in err and "contact node" in err
+
+
+def test_clamp_on_a_contact_node_is_refused(tmp_path, run_cli):
+    err = _mistake(tmp_path, run_cli, lambda t, _: t.replace(
+        'contact = "SBOTTOM"', 'contact = "SBOTTOM"\nclamped = ["BOTTOM"]'))
+    assert "fe_import.body[0].clamped" in err and "contact node" in err
+
+
+def test_export_of_another_code_is_refused(tmp_path, run_cli):
+    def edit(t, tmp):
+        (tmp / "other.npz").write_bytes((tmp / "block.inp").read_bytes()[:0])
+        np.savez(tmp / "other.npz", A=np.eye(2), B=np.zeros((2, 2)), C=np.eye(2))
+        return t.replace('"block.sti"', '"other.npz"')
+
+    err = _mistake(tmp_path, run_cli, edit)
+    assert "fe_import.body[0].stiffness" in err and "other.npz" in err
+
+
+def test_export_of_another_mesh_is_refused(tmp_path, run_cli):
+    def edit(t, tmp):
+        run_ccx(block_deck(2, 2, 1), tmp / "small", "small")
+        return t.replace('"block.sti"', '"small/small.sti"')
+
+    err = _mistake(tmp_path, run_cli, edit)
+    assert "fe_import.body[0].stiffness" in err and "small.sti" in err
+
+
+def test_truncated_export_is_refused(tmp_path, run_cli):
+    def edit(t, tmp):
+        sti = tmp / "block.sti"
+        lines = sti.read_text().splitlines()
+        sti.write_text("\n".join(lines[: len(lines) // 2]) + "\n")
+        return t
+
+    err = _mistake(tmp_path, run_cli, edit)
+    assert "fe_import.body[0].stiffness" in err and "block.sti" in err
+
+
+def test_deck_with_boundary_on_a_moved_set_is_refused(tmp_path, run_cli):
+    def edit(t, tmp):
+        deck = tmp / "block.inp"
+        deck.write_text(deck.read_text().replace("*STEP", "*BOUNDARY\nTOP, 1, 3\n*STEP"))
+        run_ccx(deck.read_text(), tmp, "block")
+        return t
+
+    err = _mistake(tmp_path, run_cli, edit)
+    assert "fe_import.load[0].nodes" in err and "no row" in err
