@@ -74,12 +74,10 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None, 
     """
     # solvers, xarray and matplotlib load here, not when `slipcycle --help` lists commands
     import numpy as np
-    import xarray as xr
 
-    from slipcycle.halfspace.wmap import w_hat_map
-    from slipcycle.io import RunOutputs, parse_case_text, write_outputs
+    from slipcycle.io import parse_case_text, write_outputs
     from slipcycle.io.results import to_jsonable
-    from slipcycle.plot.halfspace import w_hat_cubic_law, w_hat_vs_phase
+    from slipcycle.studies.w_hat_map import w_hat_map_study
 
     cases = DEMO_CASES if cases is None else cases
     lines = [f"# slipcycle demo report (version {__version__})", ""]
@@ -115,25 +113,12 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None, 
             lines.append(f"![{fig.stem}]({name}/figures/{fig.name})")
         lines.append("")
 
-    # A small Ŵ map against the phase, and the cubic law at small amplitude
+    # A small Ŵ map against the phase, and the cubic law at small amplitude: the study of
+    # `slipcycle map` (its result builds the Dataset and names the figures)
     t0 = time.perf_counter()
-    phase = np.linspace(-np.pi, np.pi, 37)
     Q1 = np.array([0.2, 0.4, 0.6, 0.8])
-    W = w_hat_map([0.4], Q1, phase)
-    q = np.geomspace(0.01, 0.5, 10)
-    Wq = w_hat_map([0.0], q, [0.0])[0, :, 0]
-    ds = xr.Dataset(
-        {"W_hat": (("P1_hat", "Q1_hat", "phase"), W,
-                   {"units": "1", "long_name": "W / (lam gamma_sigma f^2 P0)"})},
-        coords={"P1_hat": ("P1_hat", [0.4], {"units": "1", "long_name": "P1 / P0"}),
-                "Q1_hat": ("Q1_hat", Q1, {"units": "1", "long_name": "Q1 / (f P0)"}),
-                "phase": ("phase", phase, {"units": "rad",
-                                           "long_name": "lag of Q behind P"})})
-    write_outputs(out / "rough_w_map", RunOutputs(
-        summary={"model": "halfspace", "analysis": "w_hat_map",
-                 "units": {"W_hat": "1", "P1_hat": "1", "Q1_hat": "1", "phase": "rad"}},
-        dataset=ds, figures={"w_hat_vs_phase": lambda: w_hat_vs_phase(ds, 0.4),
-                             "w_hat_cubic_law": lambda: w_hat_cubic_law(q, Wq, "P̂1 = 0")}))
+    study = w_hat_map_study(np.array([0.4]), Q1, np.linspace(-np.pi, np.pi, 37), 0.4, Q1, {})
+    write_outputs(out / "rough_w_map", study.to_outputs())
     log.info("[%d/%d] rough_w_map (%.1f s)", len(cases) + 1, len(cases) + 1,
              time.perf_counter() - t0)
     if progress is not None:
