@@ -360,3 +360,28 @@ def test_rods_time_history_draws_a_varying_normal_force():
     assert len(fig.axes) == 2
     (line,) = fig.axes[1].get_lines()
     np.testing.assert_array_equal(line.get_ydata(), result.to_dataset().N.values)
+
+
+# -- sphere with out-of-phase loads: the steady loop is closed --------------------------------
+
+
+def test_out_of_phase_sphere_hysteresis_loop_is_closed_and_encloses_the_dissipation():
+    result = slipcycle.run(example_text("halfspace_sphere_out_of_phase"))
+    ds = result.to_dataset()
+    outputs = result.to_outputs()
+    for name in ("hysteresis", "load_path"):
+        ax = outputs.figures[name]().axes[0]
+        (loop,) = [ln for ln in ax.get_lines() if ln.get_label() in ("last cycle",
+                                                                     "periodic cycle")]
+        x, y = (np.asarray(v, float) for v in loop.get_data())
+        # drawn from the state at θ = 0 (the step before the cycle's first sample) to θ = 2π
+        n = int(np.sum(ds.cycle.values == ds.sizes["cycle_run"] - 1))
+        assert x.size == n + 1
+        scale = np.ptp(x)
+        assert abs(x[-1] - x[0]) <= 1e-6 * scale and abs(y[-1] - y[0]) <= 1e-6 * np.ptp(y)
+    # the closed loop drawn encloses the cycle's dissipation ∮ Q dV
+    x, y = (np.asarray(v, float) for v in [ln for ln in outputs.figures["hysteresis"]()
+                                           .axes[0].get_lines()
+                                           if ln.get_label() == "last cycle"][0].get_data())
+    area = np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(x)) * 1e-6     # V drawn in µm
+    assert area == pytest.approx(float(ds.dissipation.values[-1]), rel=1e-9)

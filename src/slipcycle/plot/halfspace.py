@@ -32,6 +32,17 @@ def _last_cycle(ds: xr.Dataset) -> xr.Dataset:
     return ds.isel(step=np.flatnonzero(ds.cycle.values == n_done - 1) if n_done else [])
 
 
+def _closed_last_cycle(ds: xr.Dataset) -> xr.Dataset:
+    """The last completed cycle with the state it starts from (θ = 0, the step before its
+    first sample θ = 2π/S): the loop drawn through it is closed, with no gap between the
+    last sample θ = 2π and the first."""
+    n_done = ds.sizes.get("cycle_run", 0)
+    if not n_done:
+        return _last_cycle(ds)
+    steps = np.flatnonzero(ds.cycle.values == n_done - 1)
+    return ds.isel(step=np.r_[steps[0] - 1, steps] if steps[0] > 0 else steps)
+
+
 def _partial_cycle(ds: xr.Dataset) -> xr.Dataset:
     """Steps of a cycle cut short by gross slip (empty otherwise)."""
     n_done = ds.sizes.get("cycle_run", 0)
@@ -51,11 +62,12 @@ def _mark_gross_slip(ax, ds: xr.Dataset, x: str) -> None:
 
 
 def hysteresis(ds: xr.Dataset) -> Figure:
-    """Tangential load Q against displacement V: assembly, last completed cycle, gross slip."""
+    """Tangential load Q against displacement V: assembly, last completed cycle (closed:
+    drawn from the state it starts from, :func:`_closed_last_cycle`), gross slip."""
     fig = _figure(5.5, 4.2)
     ax = fig.add_subplot()
     asm = ds.isel(step=np.flatnonzero(ds.cycle.values < 0))
-    last, part = _last_cycle(ds), _partial_cycle(ds)
+    last, part = _closed_last_cycle(ds), _partial_cycle(ds)
     ax.plot(np.r_[0.0, asm.V.values] * 1e6, np.r_[0.0, asm.Q.values], color="0.6", lw=1,
             label="assembly")
     if last.sizes["step"]:
@@ -85,7 +97,7 @@ def load_path(ds: xr.Dataset, friction: float) -> Figure:
     ax.fill_between([0, Pmax], [0, friction * Pmax], [0, -friction * Pmax], color="C2",
                     alpha=0.08, label=f"partial slip |Q| < fP (f = {friction:g})")
     asm = ds.isel(step=np.flatnonzero(ds.cycle.values < 0))
-    last, part = _last_cycle(ds), _partial_cycle(ds)
+    last, part = _closed_last_cycle(ds), _partial_cycle(ds)
     # the assembly starts unloaded; if it ends in gross slip, it ends at that state
     P_a, Q_a = np.r_[0.0, asm.P.values], np.r_[0.0, asm.Q.values]
     if "gross_slip_P" in ds and not ds.sizes.get("cycle_run", 0) \
