@@ -78,18 +78,20 @@ class SteadyState(StrEnum):
     initial or assembly state cannot be held; ``failed``: a run of a study that stopped
     with a solver error.
 
-    The order is the order of severity (a study reports the worst class of its runs) and
-    :attr:`code` is the position in it: the integer stored for the class in basin maps,
-    λ scans and sweep stores (``flag_values`` / ``flag_meanings``).
+    :attr:`code` is the position in this order: the integer stored for the class in basin
+    maps, λ scans and sweep stores (``flag_values`` / ``flag_meanings``). The discrete
+    models' classes come first in their order of severity (a study reports the worst class
+    of its runs: :meth:`worst`), then the classes of a start that cannot be held or a run
+    that failed, and last ``gross_slip`` (half-space contacts only).
     """
 
     SHAKEDOWN = "shakedown"
     CYCLIC_SLIP = "cyclic_slip"
     RATCHETING = "ratcheting"
-    GROSS_SLIP = "gross_slip"
     NOT_CONVERGED = "not_converged"
     INADMISSIBLE = "inadmissible"
     FAILED = "failed"
+    GROSS_SLIP = "gross_slip"
 
     @property
     def code(self) -> int:
@@ -109,7 +111,7 @@ class SteadyState(StrEnum):
 
     @classmethod
     def worst(cls, words) -> SteadyState:
-        """The most severe class among ``words`` (later in the enumeration is worse)."""
+        """The most severe class among ``words`` (the largest :attr:`code`)."""
         return cls(max((cls(w) for w in words), key=lambda s: s.code))
 
 
