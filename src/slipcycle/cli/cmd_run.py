@@ -2,7 +2,8 @@
 
 Writes ``DIR/summary.json`` (the numbers, with their ``units`` and the provenance),
 ``DIR/result.nc`` (CF-1.10 netCDF of the full histories) and ``DIR/figures/*.png``, then
-prints the summary. Only the case's model is imported; the figures are drawn by worker
+prints a short summary (steady state, cycles, dissipation per cycle, where the files are;
+``--verbose`` adds every number). Only the case's model is imported; the figures are drawn by worker
 processes that load matplotlib while the case is solved.
 """
 
@@ -12,7 +13,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from slipcycle.cli.common import StageBar, Timer, print_result, progress_enabled
+from slipcycle.cli.common import StageBar, Timer, print_run_summary, progress_enabled
 
 log = logging.getLogger("slipcycle")
 
@@ -48,5 +49,5 @@ def execute(args: argparse.Namespace) -> int:
         if worker is not None:
             worker.close()
     log.info("results written in %s", clock)
-    print_result(args, outputs.summary)
+    print_run_summary(args, outputs.summary)
     return 0

@@ -17,6 +17,7 @@ import re
 import sys
 import threading
 import time
+from pathlib import Path
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
@@ -56,6 +57,83 @@ def conventions_parent() -> argparse.ArgumentParser:
     bar.add_argument("--progress", action="store_true",
                      help="show progress bars even when stderr is not a terminal")
     return p
+
+
+_LEADING = (("-q", "--quiet", "lead_quiet"), ("-v", "--verbose", "lead_verbose"),
+            (None, "--no-progress", "lead_no_progress"), (None, "--progress", "lead_progress"))
+
+
+def add_leading_conventions(parser: argparse.ArgumentParser) -> None:
+    """The output options of :func:`conventions_parent` before the command name as well
+    (``slipcycle -q run ...``); :func:`merge_leading_conventions` merges them."""
+    g = parser.add_argument_group("output (before or after COMMAND)")
+    for short, long, dest in _LEADING:
+        names = [n for n in (short, long) if n]
+        if dest == "lead_verbose":
+            g.add_argument(*names, dest=dest, action="count", default=0,
+                           help="print diagnostics on stderr (twice: debugging detail)")
+        else:
+            g.add_argument(*names, dest=dest, action="store_true",
+                           help={"lead_quiet": "print nothing but errors",
+                                 "lead_no_progress": "no progress bar",
+                                 "lead_progress": "progress bars even off a terminal"}[dest])
+
+
+def merge_leading_conventions(parser: argparse.ArgumentParser,
+                              args: argparse.Namespace) -> argparse.Namespace:
+    """Merge the output options given before the command into those given after it (a
+    sub-parser's defaults would otherwise hide them); ``--progress`` with
+    ``--no-progress`` is refused wherever each was given."""
+    lead = {dest: getattr(args, dest, False) for _, _, dest in _LEADING}
+    for _, _, dest in _LEADING:
+        if hasattr(args, dest):
+            delattr(args, dest)
+    args.quiet = bool(getattr(args, "quiet", False) or lead["lead_quiet"])
+    args.verbose = int(getattr(args, "verbose", 0) or 0) + int(lead["lead_verbose"] or 0)
+    args.no_progress = bool(getattr(args, "no_progress", False) or lead["lead_no_progress"])
+    args.progress = bool(getattr(args, "progress", False) or lead["lead_progress"])
+    if args.progress and args.no_progress:
+        parser.error("argument --progress: not allowed with argument --no-progress")
+    return args
+
+
+def named_files(case: str | Path) -> list[tuple[str, Path]]:
+    """``(key, path)`` of every existing file a TOML case or model file names.
+
+    Every string value of the file (tables, arrays of tables, lists) that names an
+    existing regular file, relative to the case file's directory, counts: the readers
+    resolve file keys that way. A file that is not readable TOML names nothing here (its
+    reader reports it).
+    """
+    import os
+    import tomllib
+
+    case = Path(case)
+    try:
+        if case.suffix.lower() != ".toml" or not case.is_file():
+            return []
+        data = tomllib.loads(case.read_text(encoding="utf-8-sig"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return []
+    found: list[tuple[str, Path]] = []
+
+    def walk(value, key: str) -> None:
+        if isinstance(value, dict):
+            for k, v in value.items():
+                walk(v, f"{key}.{k}" if key else str(k))
+        elif isinstance(value, list):
+            for i, v in enumerate(value[:10_000]):
+                walk(v, f"{key}[{i}]")
+        elif isinstance(value, str) and value and "\0" not in value and len(value) < 4096:
+            path = Path(value) if os.path.isabs(value) else case.parent / value
+            try:
+                if path.is_file():
+                    found.append((key, path))
+            except (OSError, ValueError):           # a name too long to be a path
+                pass
+
+    walk(data, "")
+    return found
 
 
 class _StderrHandler(logging.StreamHandler):
@@ -221,6 +299,51 @@ def print_result(args: argparse.Namespace, summary: dict, keys=None) -> None:
     out = getattr(args, "out", None)
     if out is not None:
         print(f"results written to {out}/")
+
+
+def _number(value) -> str:
+    return f"{value:.6g}" if isinstance(value, float) else str(value)
+
+
+def run_headline(summary: dict, out) -> list[str]:
+    """The short summary of a run: its steady-state class, cycles, dissipation per cycle
+    with its unit, and where the files are (no per-node lists)."""
+    import numbers
+
+    state = summary.get("steady_state_class") or summary.get("steady_state")
+    words = [str(summary.get("model", "result"))]
+    if state:
+        words.append(str(state))
+    cycles = summary.get("cycles_run")
+    head = ": ".join(words[:1] + [", ".join(words[1:])]) if len(words) > 1 else words[0]
+    if isinstance(cycles, numbers.Integral):
+        head += f" after {cycles} cycles"
+    if summary.get("converged") is False:
+        head += f" (not converged; residual {_number(summary.get('residual'))})"
+    lines = [head]
+    d = summary.get("dissipation_per_cycle")
+    unit = summary.get("units", {}).get("dissipation_per_cycle", "")
+    if isinstance(d, numbers.Real) and not isinstance(d, bool):
+        lines.append(f"dissipation per cycle D = {_number(float(d))} {unit}".rstrip())
+    elif d is None and "dissipation_per_cycle" in summary:
+        lines.append("dissipation per cycle D: none (see summary.json)")
+    if out is not None:
+        lines.append(f"results in {out}/: summary.json (every number), result.nc, figures/")
+    return lines
+
+
+def print_run_summary(args: argparse.Namespace, summary: dict) -> None:
+    """Print the short summary of a run (:func:`run_headline`) unless ``--quiet``; with
+    ``--verbose`` the whole summary as JSON after it."""
+    import json
+
+    from slipcycle.io.results import to_jsonable
+
+    if getattr(args, "quiet", False):
+        return
+    print("\n".join(run_headline(summary, getattr(args, "out", None))))
+    if getattr(args, "verbose", 0):
+        print(json.dumps(to_jsonable(summary), indent=2, default=str))
 
 
 def finish_study(status, args: argparse.Namespace, case, keys: tuple[str, ...], *,

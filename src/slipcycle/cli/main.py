@@ -26,8 +26,10 @@ from slipcycle.cli.common import (
     EXIT_BAD_INPUT,
     EXIT_INTERNAL,
     EXIT_SOLVER,
+    add_leading_conventions,
     configure_logging,
     conventions_parent,
+    merge_leading_conventions,
     plain,
 )
 
@@ -49,6 +51,9 @@ _REQUIRES = {"sweep": ("zarr",), "shakedown": ("zarr",), "basins": ("zarr",)}
 #: the argument of each command that names a file (not a directory) it writes
 _FILE_OUTPUTS = {"reduce": ("out", "case")}
 
+#: the arguments that name a file a command reads (``case`` unless it is an output)
+_INPUTS = ("case", "model", "protocols")
+
 #: thresholds of the cyclic garbage collector while a command runs. A command imports
 #: NumPy, xarray, Numba and matplotlib (about 10^6 objects): at Python's default (700, 10,
 #: 10) the collector runs some 400 times, 0.2 s of a 1.5 s ``slipcycle run``; young
@@ -56,8 +61,26 @@ _FILE_OUTPUTS = {"reduce": ("out", "case")}
 _GC_THRESHOLDS = (20_000, 20, 20)
 
 
+def _path(text: str):
+    """argparse ``type`` of a path argument: an empty one is refused (``Path("")`` would
+    be the current directory)."""
+    from pathlib import Path
+
+    if not text.strip():
+        raise argparse.ArgumentTypeError("must not be empty; name a file or directory")
+    return Path(text)
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (``error: <option>: <problem>``), exit code 2."""
+    """argparse with one-line errors (``error: <option>: <problem>``), exit code 2; path
+    arguments (``type=Path``) are refused when empty."""
+
+    def add_argument(self, *args, **kwargs):
+        from pathlib import Path
+
+        if kwargs.get("type") is Path:
+            kwargs["type"] = _path
+        return super().add_argument(*args, **kwargs)
 
     def error(self, message: str):  # noqa: D401 - argparse's hook
         self.exit(EXIT_BAD_INPUT, f"error: {self.prog}: {_one_line(message)} "
@@ -89,6 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "'slipcycle examples' lists the shipped example cases.",
     )
     parser.add_argument("--version", action="version", version=f"slipcycle {__version__}")
+    add_leading_conventions(parser)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     commands = _Commands(sub, conventions_parent())
@@ -97,16 +121,53 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _check_outputs(args: argparse.Namespace) -> None:
-    """Refuse unwritable output paths before any work (one line naming the path)."""
-    from slipcycle.io.results import check_output_dir, check_output_file
-
+def _outputs(args: argparse.Namespace) -> list[tuple[str, object, str]]:
+    """``(option, path, kind)`` of every output of the command (kind "file" or "dir")."""
     files = _FILE_OUTPUTS.get(args.command, ())
+    found = []
     for name in ("out", "case"):
         value = getattr(args, name, None)
         if value is None or (name == "case" and name not in files):
             continue
-        (check_output_file if name in files else check_output_dir)(value)
+        kind = "file" if name in files else "dir"
+        if args.command == "reduce" and name == "out" and value.suffix.lower() != ".npz":
+            kind = "dir"                    # a model file's case, stiffness and report
+        found.append((f"--{name}", value, kind))
+    return found
+
+
+def _inputs(args: argparse.Namespace) -> list[tuple[str, object]]:
+    """``(key, path)`` of every file the command reads: its file arguments and the files
+    they name (:func:`slipcycle.cli.common.named_files`)."""
+    from slipcycle.cli.common import named_files
+    from slipcycle.io.case import MAX_CASE_BYTES
+    from slipcycle.io.files import check_input_file
+
+    outputs = _FILE_OUTPUTS.get(args.command, ())
+    found = []
+    for name in _INPUTS:
+        value = getattr(args, name, None)
+        if value is None or name in outputs:
+            continue
+        key = str(value) if name in ("case", "model") else f"--{name}"
+        toml = value.suffix.lower() == ".toml"
+        check_input_file(value, key, MAX_CASE_BYTES if toml else None, empty_ok=toml,
+                         what="case file" if name == "case" else "file")
+        found.append((key, value))
+        found += named_files(value)
+    return found
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse, before any work, output paths that cannot be written or that would write
+    over an input (one line naming the option and the path)."""
+    from slipcycle.io.files import check_no_overwrite
+    from slipcycle.io.results import check_output_dir, check_output_file
+
+    outputs = _outputs(args)
+    check_no_overwrite(_inputs(args), outputs)
+    for _, value, kind in outputs:
+        (check_output_file if kind == "file" else check_output_dir)(value)
 
 
 def _check_extras(args: argparse.Namespace) -> None:
@@ -171,7 +232,7 @@ def _main(argv: list[str] | None) -> int:
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
     # figures are files: the non-interactive backend, no GUI toolkit probed
     os.environ.setdefault("MPLBACKEND", "Agg")
-    args = parser.parse_args(argv)
+    args = merge_leading_conventions(parser, parser.parse_args(argv))
     configure_logging(args)
     if args.command != "examples":
         from slipcycle.io.metadata import set_command_line

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from slipcycle.errors import InputError
+from slipcycle.io.files import check_input_file
 from slipcycle.io.sniff import describe
 from slipcycle.registry import MODEL_COMMANDS
 
@@ -80,6 +81,15 @@ class Section:
 
     def has(self, key: str) -> bool:
         return key in self.data
+
+    def raw(self, key: str, default: Any = _MISSING) -> Any:
+        """The TOML value of ``key`` unconverted (marked read); ``default`` where absent
+        (required without one). For values the caller validates itself."""
+        return self._get(key, default)
+
+    def accept(self, keys) -> None:
+        """Mark ``keys`` read (validated by the caller, e.g. through a sub-section)."""
+        self._used.update(keys)
 
     def _get(self, key: str, default: Any) -> Any:
         self._used.add(key)
@@ -156,6 +166,9 @@ class Section:
             p = self.base_dir / p
         if must_exist and not p.exists():
             raise self.error(key, f"file not found: {p}")
+        if must_exist:
+            # kind and size before any reader opens it (a device or FIFO is read forever)
+            check_input_file(p, self.key(key))
         return p
 
     # -- arrays --------------------------------------------------------------------------
@@ -372,12 +385,8 @@ def read_text_file(path: str | Path, what: str = "case file") -> str:
     not UTF-8 and files too large to be a case file, each with one line.
     """
     path = Path(path)
+    check_input_file(path, str(path), MAX_CASE_BYTES, what=what, empty_ok=True)
     try:
-        if path.is_dir():
-            raise CaseError(str(path), f"is a directory, not a {what}")
-        size = path.stat().st_size
-        if size > MAX_CASE_BYTES:
-            raise CaseError(str(path), f"is {size / 2**20:.0f} MiB: too large for a {what}")
         raw = path.read_bytes()
     except OSError as exc:
         raise CaseError(str(path), f"cannot read {what}: {exc.strerror or exc}") from None
@@ -387,7 +396,8 @@ def read_text_file(path: str | Path, what: str = "case file") -> str:
                         "file: [discrete] stiffness_file = \"...\"" if kind else
                         f"is a binary file, not a {what} (TOML text)")
     try:
-        return raw.decode("utf-8")
+        # "utf-8-sig": a byte-order mark (Windows editors) is not part of the TOML text
+        return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise CaseError(str(path), f"is not UTF-8 text (byte 0x{raw[exc.start]:02x} at "
                         f"offset {exc.start}); save the {what} as UTF-8") from None
