@@ -347,7 +347,8 @@ class StudyResult(_Contract):
     Subclasses (one per analysis: :class:`slipcycle.studies.shakedown.ShakedownResult`,
     :class:`slipcycle.studies.basins.BasinsResult`,
     :class:`slipcycle.studies.w_hat_map.WHatMapResult`,
-    :class:`slipcycle.rods.limits.LimitsResult`) hold the analysis' numbers as fields and
+    :class:`slipcycle.studies.limits.LimitsResult` and the other studies of
+    :mod:`slipcycle.studies`) hold the analysis' numbers as fields and
     implement :meth:`summary`, :meth:`to_dataset` (the one place the analysis' Dataset is
     built), :meth:`figures` and :meth:`headline`; they set :attr:`model`,
     :attr:`analysis` and :attr:`FLAGS`.
