@@ -71,17 +71,19 @@ def run_ccx(deck_text: str, directory: Path, jobname: str = "job",
 
 def block_deck(nx: int = 4, ny: int = 4, nz: int = 2, size=(0.01, 0.01, 0.005),
                element: str = "C3D8", E: float = 210e9, nu: float = 0.3,
-               density: float = 7800.0, step: str = "sti") -> str:
+               density: float = 7800.0, step: str = "sti", origin=(0.0, 0.0, 0.0)) -> str:
     """A CalculiX deck of a box meshed by nx × ny × nz hexahedra (C3D8 or C3D8I).
 
     Node sets ``BOTTOM`` (z = 0), ``TOP`` (z = height), ``SIDE`` (x = 0, not on the top or
     bottom); element-face surfaces ``SBOTTOM`` (faces S1 on z = 0) and ``STOP`` (S2 on the
     top); no ``*BOUNDARY`` (the ``.sti`` route wants the full K). ``step="sti"`` writes the
-    ``*FREQUENCY, SOLVER=MATRIXSTORAGE`` step; ``None`` no step.
+    ``*FREQUENCY, SOLVER=MATRIXSTORAGE`` step; ``None`` no step. The box's lowest corner
+    is at ``origin`` (m).
     """
     Lx, Ly, H = size
-    xs, ys, zs = (np.linspace(0.0, Lx, nx + 1), np.linspace(0.0, Ly, ny + 1),
-                  np.linspace(0.0, H, nz + 1))
+    x0, y0, z0 = origin
+    xs, ys, zs = (x0 + np.linspace(0.0, Lx, nx + 1), y0 + np.linspace(0.0, Ly, ny + 1),
+                  z0 + np.linspace(0.0, H, nz + 1))
     node = {}
     lines = ["*HEADING", f"box {Lx} x {Ly} x {H} m, {nx}x{ny}x{nz} {element}",
              "*NODE, NSET=NALL"]
@@ -90,7 +92,8 @@ def block_deck(nx: int = 4, ny: int = 4, nz: int = 2, size=(0.01, 0.01, 0.005),
         for iy, y in enumerate(ys):
             for ix, x in enumerate(xs):
                 node[ix, iy, iz] = k
-                lines.append(f"{k}, {x:.17g}, {y:.17g}, {z:.17g}")
+                # shortest round-trip text: ccx reads at most 20 characters a field
+                lines.append(f"{k}, {float(x)!r}, {float(y)!r}, {float(z)!r}")
                 k += 1
     lines.append(f"*ELEMENT, TYPE={element}, ELSET=EALL")
     bottom_el, top_el = [], []

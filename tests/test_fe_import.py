@@ -270,3 +270,89 @@ def test_deck_with_boundary_on_a_moved_set_is_refused(tmp_path, run_cli):
 
     err = _mistake(tmp_path, run_cli, edit)
     assert "fe_import.load[0].nodes" in err and "no row" in err
+
+
+# -- two bodies: contact surfaces matched node to node ----------------------------------------
+
+TWO = """
+model = "fe_import"
+[fe_import]
+tolerance = 1e-9
+[[fe_import.body]]
+stiffness = "upper/block.sti"
+mesh = "upper/block.inp"
+contact = "SBOTTOM"
+[[fe_import.body]]
+stiffness = "lower/block.sti"
+mesh = "lower/block.inp"
+contact = "STOP"
+clamped = ["BOTTOM"]
+[[fe_import.load]]
+name = "normal"
+nodes = "TOP"
+displacement = [0, 0, -1e-6]
+[[fe_import.load]]
+name = "pull"
+body = 2
+nodes = "SIDE"
+force = [3.0, 0.0, 0.0]
+[fe_import.discrete]
+friction = 0.5
+"""
+
+
+def _two_blocks(tmp: Path, shift: float = 0.0) -> Path:
+    run_ccx(block_deck(3, 3, 2, size=SIZE, E=E, nu=NU), tmp / "upper", "block")
+    run_ccx(block_deck(3, 3, 2, size=(0.01, 0.01, 0.003), E=E, nu=NU,
+                       origin=(shift, 0.0, -0.003)), tmp / "lower", "block")
+    (tmp / "model.toml").write_text(TWO)
+    return tmp / "model.toml"
+
+
+def test_two_bodies_equal_the_condensation_of_both_meshes(tmp_path):
+    from skfem import Basis, ElementHex1, ElementVector
+    from skfem.io.meshio import from_meshio
+
+    from slipcycle.fe.assembly import stiffness
+
+    red = import_joint(read_import_model(_two_blocks(tmp_path))).reduced
+    meshes = [meshio.read(tmp_path / d / "block.inp") for d in ("upper", "lower")]
+    Ks = [stiffness(Basis(from_meshio(meshio.Mesh(m.points, [("hexahedron",
+                                                               m.cells_dict["hexahedron"])])),
+                          ElementVector(ElementHex1())), E, NU) for m in meshes]
+    import scipy.sparse as sp
+
+    xyz = np.vstack([m.points for m in meshes]).T
+    n1, n = len(meshes[0].points), xyz.shape[1]
+    z = xyz[2]
+    c1 = np.flatnonzero((np.arange(n) < n1) & (np.abs(z) < 1e-12))
+    c2 = np.flatnonzero((np.arange(n) >= n1) & (np.abs(z) < 1e-12))
+    c1 = c1[np.lexsort((xyz[0, c1], xyz[1, c1]))]
+    c2 = c2[np.lexsort((xyz[0, c2], xyz[1, c2]))]
+    fixed = np.zeros((n, 3), bool)
+    top = (np.arange(n) < n1) & (np.abs(z - SIZE[2]) < 1e-12)
+    fixed[top] = True
+    fixed[(np.arange(n) >= n1) & (np.abs(z + 0.003) < 1e-12)] = True
+    u = np.zeros((n, 3))
+    u[top] = (0, 0, -1e-6)
+    f = np.zeros((n, 3))
+    f[(np.arange(n) >= n1) & (np.abs(xyz[0]) < 1e-12) & (z < -1e-12) & (z > -0.003 + 1e-12)] \
+        = (3.0, 0, 0)
+    own = condense_contact_3d(lambda: (sp.block_diag(Ks, format="csr"), "hex1"),
+                              np.arange(3 * n).reshape(n, 3), xyz,
+                              pairs=np.column_stack([c1, c2]), normals=(0, 0, -1.0),
+                              fixed=fixed, cases=[Case3D("normal", "1", displacement=u),
+                                                  Case3D("pull", "1", force=f)])
+    for k in "ABC":
+        assert _rel(getattr(red, k), getattr(own, k)) < 1e-10, k
+    for name in ("normal", "pull"):
+        for part in ("q", "p"):
+            assert _rel(red.loads[name][part], own.loads[name][part]) < 1e-10, (name, part)
+
+
+def test_two_bodies_that_do_not_match_name_the_first_unmatched_node(tmp_path, run_cli):
+    path = _two_blocks(tmp_path, shift=1e-6)
+    code, _, err = run_cli("reduce", path, "--out", tmp_path / "out")
+    assert code == 2 and err.count("\n") == 1 and not (tmp_path / "out").exists()
+    assert "fe_import.tolerance" in err and "contact node 1 of body 1" in err \
+        and "1e-06 m" in err
