@@ -233,3 +233,19 @@ def test_layer_block_is_the_layers_contract():
 def test_rules_the_code_broke_are_gone(stale):
     """The page once named an alias, a generic reader and rules the code broke."""
     assert stale not in _text()
+
+
+def test_the_modules_that_parse_toml_are_the_ones_the_page_names():
+    text = _text()
+    conventions = text[text.index("## Conventions"):]
+    rule = conventions[conventions.index("- Solvers take arrays"):]
+    rule = rule[:rule.index("\n- ")]
+    named = {t.partition(" ")[0] for t in TICKS.findall(rule) if t.endswith(".py")}
+    users = set()
+    for path in SRC.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        if any(isinstance(n, ast.Import) and any(a.name == "tomllib" for a in n.names)
+               for n in ast.walk(tree)):
+            users.add(path.relative_to(SRC).as_posix())
+    assert "io/case.py" in users
+    assert users == named, f"parse TOML: {sorted(users)}; the page names {sorted(named)}"
