@@ -46,10 +46,15 @@ from slipcycle.discrete.shakedown import (
 from slipcycle.discrete.sizes import cells_bytes, check_memory
 from slipcycle.io import Case, CaseError
 from slipcycle.plot.shakedown import basin_map
-from slipcycle.result import STEADY_STATES, StudyResult
-from slipcycle.studies.common import model_case, read_protocols
+from slipcycle.result import STEADY_STATES
+from slipcycle.studies.common import (
+    CONVERGED_ATTRS,
+    BasinsStudyResult,
+    model_case,
+    read_protocols,
+)
 from slipcycle.sweep import Axis, SweepError, run_sweep
-from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
+from slipcycle.sweep.dataset import StudyStatus, as_case_error
 
 __all__ = ["load_discrete_case", "basin_row_task", "basin_block_task", "grid_blocks",
            "lam_start_task", "protocol_task", "random_task", "read_protocols", "parse_range",
@@ -201,9 +206,6 @@ SUMMARY_UNITS = {
 #: every word of the categorical summary entries
 SUMMARY_FLAGS = {"mode": ("grid", "random", "protocols")}
 
-CONVERGED_ATTRS = {"units": "1", "long_name": "the start reached a steady state (shakedown, "
-                   "cyclic slip or ratcheting) within run.cycles; false for not_converged, "
-                   "inadmissible and failed starts"}
 
 
 def parse_range(text: str, key: str) -> tuple[float, float]:
@@ -378,7 +380,7 @@ def basins_study(case: Case, out, *, grid: int | None = None, random: int | None
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
-class BasinsResult(StudyResult):
+class BasinsResult(BasinsStudyResult):
     """Steady state of a discrete case over initial conditions (``slipcycle basins``).
 
     Attributes
@@ -412,32 +414,14 @@ class BasinsResult(StudyResult):
     """
 
     model: ClassVar[str] = "discrete"
-    analysis: ClassVar[str] = "basins"
     FLAGS: ClassVar[dict] = SUMMARY_FLAGS
 
-    mode: str
-    lam: float
-    n_nodes: int
     lambda1: float
     lambda2: float
-    data: dict
-    store: object = None
-    axes: tuple = ()
     v1: np.ndarray | None = None
     v2: np.ndarray | None = None
     region: object = None
     box_counting: dict | None = None
-
-    @property
-    def steady_state(self) -> np.ndarray:
-        """Class codes over the starts (:data:`~slipcycle.result.STEADY_STATES`)."""
-        return self.data["steady_state"]
-
-    @property
-    def class_counts(self) -> dict[str, int]:
-        """Number of starts per steady-state class."""
-        cls = self.steady_state
-        return {STEADY_STATES[c]: int((cls == c).sum()) for c in np.unique(cls)}
 
     def headline(self) -> list[tuple]:
         """Mode, λ, starts, class counts, whether both outcomes occur, λ1, λ2."""
@@ -488,32 +472,14 @@ class BasinsResult(StudyResult):
         -------
         xarray.Dataset
         """
-        cls = self.steady_state
-        # reached a steady state (shakedown, cyclic slip or ratcheting) within run.cycles
-        converged = np.isin(cls, [STEADY_STATES.index(c) for c in
-                                  ("shakedown", "cyclic_slip", "ratcheting")])
-        codes = list(range(len(STEADY_STATES)))
         if self.mode != "grid":
-            ds = store_dataset(self.store, self.axes, attrs={
-                "steady_state": {"units": "1", "flag_values": codes,
-                                 "flag_meanings": " ".join(STEADY_STATES)},
-                "dissipation_per_cycle": {"units": "J"},
-                "dissipation_per_node": {"units": "J"},
-                "cycles_run": {"units": "1"}, "n_slipping": {"units": "1"},
-                "memory_erased": {"units": "1"}})
-            ds["converged"] = (tuple(ds["steady_state"].dims), converged, CONVERGED_ATTRS)
-            return ds
-        d, g = self.data, ("v2", "v1")
+            return self.store_dataset()
+        attrs, g = self.record_attrs(), ("v2", "v1")
+        data = {name: (g + ("node",) if name == "dissipation_per_node" else g,
+                       self.data[name], a) for name, a in attrs.items()}
+        data["converged"] = (g, self.converged, CONVERGED_ATTRS)
         return xr.Dataset(
-            {"steady_state": (g, cls, {"units": "1", "flag_values": codes,
-                                       "flag_meanings": " ".join(STEADY_STATES)}),
-             "dissipation_per_cycle": (g, d["dissipation_per_cycle"], {"units": "J"}),
-             "dissipation_per_node": (g + ("node",), d["dissipation_per_node"],
-                                      {"units": "J"}),
-             "cycles_run": (g, d["cycles_run"], {"units": "1"}),
-             "n_slipping": (g, d["n_slipping"], {"units": "1"}),
-             "memory_erased": (g, d["memory_erased"], {"units": "1"}),
-             "converged": (g, converged, CONVERGED_ATTRS)},
+            data,
             coords={"v1": ("v1", self.v1, {"units": "m",
                                            "long_name": "initial slip of node 0"}),
                     "v2": ("v2", self.v2, {"units": "m",

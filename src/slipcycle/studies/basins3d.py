@@ -35,10 +35,10 @@ from slipcycle.errors import SolverError
 from slipcycle.io import Case, CaseError
 from slipcycle.loading.nodal import force_scale
 from slipcycle.plot.interface3d import basin_dissipation
-from slipcycle.result import STEADY_STATES, StudyResult
-from slipcycle.studies.common import model_case, read_protocols
+from slipcycle.result import STEADY_STATES
+from slipcycle.studies.common import BasinsStudyResult, model_case, read_protocols
 from slipcycle.sweep import Axis, SweepError, run_sweep
-from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
+from slipcycle.sweep.dataset import StudyStatus, as_case_error
 
 __all__ = ["STEADY_CODES", "Basins3DResult", "basins3d_study",
            "run_record3d", "start_scale", "load_discrete3d_case"]
@@ -57,9 +57,6 @@ SUMMARY_UNITS = {
     "attractors": "J", "both_outcomes": "1", "start_scale": "m", "wall_time_s": "s",
 }
 SUMMARY_FLAGS = {"mode": ("random", "protocols")}
-CONVERGED_ATTRS = {"units": "1", "long_name": "the start reached a steady state (shakedown, "
-                   "cyclic slip or ratcheting) within run.cycles; false for not_converged, "
-                   "inadmissible and failed starts"}
 
 
 def _code(state: str) -> int:
@@ -236,7 +233,7 @@ def basins3d_study(case: Case, out, *, grid: int | None = None, random: int | No
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
-class Basins3DResult(StudyResult):
+class Basins3DResult(BasinsStudyResult):
     """Steady state of a ``discrete3d`` case over initial conditions (``slipcycle basins``).
 
     Attributes
@@ -263,33 +260,15 @@ class Basins3DResult(StudyResult):
     """
 
     model: ClassVar[str] = "discrete3d"
-    analysis: ClassVar[str] = "basins"
     FLAGS: ClassVar[dict] = SUMMARY_FLAGS
 
-    mode: str
-    lam: float
-    n_nodes: int
-    data: dict
-    store: object = None
-    axes: tuple = ()
     start_scale: float | None = None
-
-    @property
-    def steady_state(self) -> np.ndarray:
-        """Class codes over the starts (:data:`STEADY_CODES`)."""
-        return np.asarray(self.data["steady_state"])
-
-    @property
-    def class_counts(self) -> dict[str, int]:
-        """Number of starts per steady-state class."""
-        cls = self.steady_state
-        return {STEADY_CODES[c]: int((cls == c).sum()) for c in np.unique(cls)}
 
     def attractors(self, rtol: float = 1e-6) -> list[float]:
         """Distinct steady dissipations per cycle (within ``rtol`` of the largest) over the
         starts that converged [J]."""
-        ok = self.steady_state <= _code("ratcheting")
-        return distinct_values(np.asarray(self.data["dissipation_per_cycle"], float)[ok], rtol)
+        D = np.asarray(self.data["dissipation_per_cycle"], float)
+        return distinct_values(D[self.converged], rtol)
 
     def headline(self) -> list[tuple]:
         """Mode, λ, starts, class counts, distinct steady dissipations."""
@@ -312,7 +291,7 @@ class Basins3DResult(StudyResult):
             ``units``.
         """
         cls = self.steady_state
-        ok = cls <= _code("ratcheting")
+        ok = self.converged
         D = np.asarray(self.data["dissipation_per_cycle"], float)
         return {"model": self.model, "analysis": self.analysis, "mode": self.mode,
                 "lam": self.lam, "n_nodes": self.n_nodes, "starts": int(cls.size),
@@ -334,18 +313,7 @@ class Basins3DResult(StudyResult):
         -------
         xarray.Dataset
         """
-        codes = list(range(len(STEADY_CODES)))
-        ds = store_dataset(self.store, self.axes, attrs={
-            "steady_state": {"units": "1", "flag_values": codes,
-                             "flag_meanings": " ".join(STEADY_CODES)},
-            "dissipation_per_cycle": {"units": "J"},
-            "dissipation_per_node": {"units": "J"},
-            "cycles_run": {"units": "1"}, "residual": {"units": "1"},
-            "n_slipping": {"units": "1"}, "n_separating": {"units": "1"},
-            "memory_erased": {"units": "1"}})
-        converged = self.steady_state <= _code("ratcheting")
-        ds["converged"] = (tuple(ds["steady_state"].dims), converged, CONVERGED_ATTRS)
-        return ds
+        return self.store_dataset(residual="1", n_separating="1")
 
     def figures(self, dataset: xr.Dataset | None = None) -> dict:
         """``basin_dissipation``: dissipation per cycle reached from every start, coloured

@@ -6,21 +6,34 @@ assembly protocols.
   task validates in its worker process;
 - :func:`read_protocols` — assembly protocols (load states visited before cycling, Ahn,
   Bertocchi & Barber 2008) of an N-node system, 2-D or 3-D, from a file of ``[[protocol]]``
-  tables read with the case files' :class:`~slipcycle.io.Section` rules.
+  tables read with the case files' :class:`~slipcycle.io.Section` rules;
+- :class:`BasinsStudyResult` — what the 2-D and 3-D basins results share: the starts'
+  records, their class codes (:data:`~slipcycle.result.STEADY_STATES`), class counts, the
+  starts that converged and the Dataset of a sweep store.
 """
 
 from __future__ import annotations
 
 import tomllib
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
+import xarray as xr
 
 from slipcycle.io import Case, CaseError
 from slipcycle.io.case import Section, parse_case_text
+from slipcycle.result import STEADY_STATES, SteadyState, StudyResult
+from slipcycle.sweep.dataset import store_dataset
 
-__all__ = ["model_case", "read_protocols"]
+__all__ = ["model_case", "read_protocols", "BasinsStudyResult", "CONVERGED_ATTRS"]
+
+#: attributes of the ``converged`` variable of a basins Dataset
+CONVERGED_ATTRS = {"units": "1", "long_name": "the start reached a steady state (shakedown, "
+                   "cyclic slip or ratcheting) within run.cycles; false for not_converged, "
+                   "inadmissible and failed starts"}
 
 
 def model_case(case_text: str, case_path: str | None, tables: Sequence[str]) -> Case:
@@ -90,3 +103,76 @@ def read_protocols(path: Path, n: int, pairs: bool = False) -> list[np.ndarray]:
     if not out:
         raise CaseError("protocol", "the protocols file holds no [[protocol]] tables")
     return out
+
+
+@dataclass(frozen=True, kw_only=True, repr=False, eq=False)
+class BasinsStudyResult(StudyResult):
+    """Steady states of a discrete case over many starts: what the 2-D and 3-D basins
+    studies share.
+
+    Attributes
+    ----------
+    wall_time_s : float
+        Wall time of the runs in this call [s].
+    mode : str
+        How the starts were made (``grid``, ``random``, ``protocols``).
+    lam : float
+        Load factor λ of the runs [1].
+    n_nodes : int
+        Nodes N of the system.
+    data : dict of str to ndarray
+        The stored outputs over the starts: ``steady_state`` (codes of
+        :data:`~slipcycle.result.STEADY_STATES`), ``dissipation_per_cycle`` [J],
+        ``dissipation_per_node`` [J] (last axis: node), ``cycles_run``, ``n_slipping``,
+        ``memory_erased`` and the model's own records.
+    store : SweepStore or None
+        The store the runs were kept in (the Dataset of :meth:`store_dataset` is read from
+        it, with the task's own attributes).
+    axes : tuple of Axis
+        The sweep axes of ``store``.
+    """
+
+    analysis: ClassVar[str] = "basins"
+
+    mode: str
+    lam: float
+    n_nodes: int
+    data: dict
+    store: object = None
+    axes: tuple = ()
+
+    @property
+    def steady_state(self) -> np.ndarray:
+        """Class codes over the starts (:data:`~slipcycle.result.STEADY_STATES`)."""
+        return np.asarray(self.data["steady_state"])
+
+    @property
+    def class_counts(self) -> dict[str, int]:
+        """Number of starts per steady-state class."""
+        cls = self.steady_state
+        return {STEADY_STATES[c]: int((cls == c).sum()) for c in np.unique(cls)}
+
+    @property
+    def converged(self) -> np.ndarray:
+        """Starts that reached a steady state (shakedown, cyclic slip or ratcheting)."""
+        return np.isin(self.steady_state, [s.code for s in SteadyState if s.converged])
+
+    @staticmethod
+    def record_attrs(**units: str) -> dict[str, dict]:
+        """Attributes of the records of a start: class codes (CF flags), dissipation [J],
+        cycles run, slipping nodes, memory erased, and the records given in ``units``
+        (name -> unit)."""
+        attrs = {"steady_state": {"units": "1", "flag_values": list(range(len(STEADY_STATES))),
+                                  "flag_meanings": " ".join(STEADY_STATES)},
+                 "dissipation_per_cycle": {"units": "J"}, "dissipation_per_node": {"units": "J"},
+                 "cycles_run": {"units": "1"}, "n_slipping": {"units": "1"},
+                 "memory_erased": {"units": "1"}}
+        attrs.update({name: {"units": u} for name, u in units.items()})
+        return attrs
+
+    def store_dataset(self, **units: str) -> xr.Dataset:
+        """The Dataset of the store: the records of :meth:`record_attrs` and ``converged``
+        over the sweep axes."""
+        ds = store_dataset(self.store, self.axes, attrs=self.record_attrs(**units))
+        ds["converged"] = (tuple(ds["steady_state"].dims), self.converged, CONVERGED_ATTRS)
+        return ds
