@@ -356,3 +356,125 @@ def test_two_bodies_that_do_not_match_name_the_first_unmatched_node(tmp_path, ru
     assert code == 2 and err.count("\n") == 1 and not (tmp_path / "out").exists()
     assert "fe_import.tolerance" in err and "contact node 1 of body 1" in err \
         and "1e-06 m" in err
+
+
+# -- tetrahedra, a node-set contact and a pressure: against slipcycle's own mesh-file path -----
+
+_KUHN = ((0, 1, 2, 6), (0, 2, 3, 6), (0, 3, 7, 6), (0, 7, 4, 6), (0, 4, 5, 6), (0, 5, 1, 6))
+
+
+def _tet_deck(n=(3, 3, 3)) -> tuple[str, np.ndarray, np.ndarray]:
+    """The hexahedra of block_deck split into six C3D4 each (one diagonal: conforming)."""
+    hexdeck = block_deck(*n, size=SIZE, step=None)
+    lines = hexdeck.splitlines()
+    i0 = next(i for i, ln in enumerate(lines) if ln.startswith("*ELEMENT"))
+    i1 = next(i for i, ln in enumerate(lines) if i > i0 and ln.startswith("*"))
+    pts = np.array([[float(v) for v in ln.split(",")[1:]]
+                    for ln in lines[lines.index("*NODE, NSET=NALL") + 1:i0]])
+    hexes = np.array([[int(v) for v in ln.split(",")[1:]] for ln in lines[i0 + 1:i1]])
+    tets = np.vstack([hexes[:, list(k)] for k in _KUHN])
+    X = pts[tets - 1]
+    vol = np.einsum("ij,ij->i", X[:, 1] - X[:, 0],
+                    np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 0]))
+    tets[vol < 0, 1], tets[vol < 0, 2] = tets[vol < 0, 2], tets[vol < 0, 1].copy()
+    body = ["*ELEMENT, TYPE=C3D4, ELSET=EALL"] + [
+        f"{e + 1}, " + ", ".join(map(str, t)) for e, t in enumerate(tets)]
+    rest = lines[i1:]
+    # the node sets, then the material (the hexahedra's element sets and faces dropped)
+    keep = (rest[:next(j for j, ln in enumerate(rest) if ln.startswith("*ELSET"))]
+            + rest[rest.index("*MATERIAL, NAME=STEEL"):])
+    deck = "\n".join(lines[:i0] + body + keep) + \
+        "\n*STEP\n*FREQUENCY, SOLVER=MATRIXSTORAGE\n*END STEP\n"
+    return deck, pts, tets - 1
+
+
+PRESSURE = """
+model = "fe_import"
+[[fe_import.body]]
+stiffness = "block.sti"
+mesh = "block.inp"
+contact = "BOTTOM"
+[[fe_import.load]]
+name = "normal"
+nodes = "TOP"
+displacement = [0, 0, -1e-6]
+[[fe_import.load]]
+name = "press"
+surface = "SIDE"
+pressure = 1e6
+[fe_import.discrete]
+friction = 0.5
+"""
+
+
+def test_c3d4_pressure_and_areas_equal_the_mesh_file_reduction(tmp_path):
+    from skfem import MeshTet
+
+    from slipcycle.fe.meshfile3d import MeshSolid, reduce_mesh_solid
+
+    deck, pts, tets = _tet_deck()
+    run_ccx(deck, tmp_path, "block")
+    (tmp_path / "model.toml").write_text(PRESSURE)
+    joint = import_joint(read_import_model(tmp_path / "model.toml"))
+    mesh = MeshTet(np.ascontiguousarray(pts.T), np.ascontiguousarray(tets.T))
+    f = mesh.p[:, mesh.facets]                                 # (3, 3, nf)
+    h = SIZE[2] / 3
+
+    def facets(pred):
+        return np.flatnonzero(pred(f).all(axis=0))
+
+    surfaces = {"contact": facets(lambda x: np.abs(x[2]) < 1e-12),
+                "top": facets(lambda x: np.abs(x[2] - SIZE[2]) < 1e-12),
+                "side": facets(lambda x: (np.abs(x[0]) < 1e-12) & (x[2] > h - 1e-12)
+                               & (x[2] < SIZE[2] - h + 1e-12))}
+    solid = MeshSolid(mesh, surfaces, E, NU, np.array([0.0, 0.0, 1.0]), loads=(
+        {"name": "normal", "boundary": "top", "displacement": (0.0, 0.0, -1e-6)},
+        {"name": "press", "boundary": "side", "traction": (1e6, 0.0, 0.0)}),
+        element="P1", formulation="displacement")
+    own, area = reduce_mesh_solid(solid)
+    red = joint.reduced
+    assert np.allclose(red.coordinates, own.coordinates, rtol=0, atol=1e-15)
+    for k in "ABC":
+        assert _rel(getattr(red, k), getattr(own, k)) < 1e-10, k
+    for name in ("normal", "press"):
+        for part in ("q", "p"):
+            assert _rel(red.loads[name][part], own.loads[name][part]) < 1e-10, (name, part)
+    np.testing.assert_allclose(joint.area, area, rtol=1e-12)
+    assert joint.area.sum() == pytest.approx(SIZE[0] * SIZE[1], rel=1e-13)
+
+
+def test_gmsh_mesh_with_physical_groups_gives_the_decks_reduction(tmp_path):
+    """The same tetrahedra as a Gmsh file (node k has label k + 1), the contact, the
+    pressed wall and the moved grip as physical groups of triangles, give the deck's
+    reduction."""
+    deck, pts, tets = _tet_deck()
+    run_ccx(deck, tmp_path, "block")
+    (tmp_path / "model.toml").write_text(PRESSURE)
+    by_deck = import_joint(read_import_model(tmp_path / "model.toml"))
+    faces = np.vstack([tets[:, [0, 1, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 3]],
+                       tets[:, [1, 2, 3]]])
+    X = pts[faces]
+    h = SIZE[2] / 3
+    bottom = faces[np.all(np.abs(X[..., 2]) < 1e-12, axis=1)]
+    side = faces[np.all((np.abs(X[..., 0]) < 1e-12) & (X[..., 2] > h - 1e-12)
+                        & (X[..., 2] < SIZE[2] - h + 1e-12), axis=1)]
+    top = faces[np.all(np.abs(X[..., 2] - SIZE[2]) < 1e-12, axis=1)]
+    tags = [np.zeros(len(tets), int), np.full(len(bottom), 1), np.full(len(side), 2),
+            np.full(len(top), 3)]
+    mesh = meshio.Mesh(pts, [("tetra", tets), ("triangle", bottom), ("triangle", side),
+                             ("triangle", top)],
+                       cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+                       field_data={"contact": np.array([1, 2]), "wall": np.array([2, 2]),
+                                   "grip": np.array([3, 2])})
+    mesh.write(tmp_path / "block.msh", file_format="gmsh22", binary=False)
+    text = PRESSURE.replace('"block.inp"', '"block.msh"').replace('"BOTTOM"', '"contact"')
+    text = text.replace('"TOP"', '"grip"').replace('"SIDE"', '"wall"')
+    (tmp_path / "gmsh.toml").write_text(text)
+    by_gmsh = import_joint(read_import_model(tmp_path / "gmsh.toml"))
+    for k in "ABC":
+        assert _rel(getattr(by_gmsh.reduced, k), getattr(by_deck.reduced, k)) < 1e-12, k
+    for name in ("normal", "press"):
+        for part in ("q", "p"):
+            assert _rel(by_gmsh.reduced.loads[name][part],
+                        by_deck.reduced.loads[name][part]) < 1e-12, (name, part)
+    np.testing.assert_allclose(by_gmsh.area, by_deck.area, rtol=1e-12)
