@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from slipcycle.coupled.cycles import CycleHistory, assemble, ratchet_residual, run_scales
 from slipcycle.coupled.settings import SolverStats
 from slipcycle.coupled.solution import CYCLE_CLASSES, CycleSolution, last_cycle
 from slipcycle.discrete.evolution import Evolution
@@ -51,7 +52,6 @@ from slipcycle.discrete.periodic import (
 )
 from slipcycle.errors import InadmissibleInitialState
 from slipcycle.kernels.creep import creep_distance
-from slipcycle.loading.nodal import force_scale
 from slipcycle.result import STEADY_STATES
 
 __all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
@@ -407,14 +407,11 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     SteadyResult
     """
     n = system.n_nodes
-    theta, vals = load.cycle_samples(steps_per_cycle)
-    scale_vals = vals if protocol is None else np.vstack([vals, protocol])
-    F = force_scale(scale_vals)
-    disp_scale = F / float(np.max(np.diag(system.K)))
+    theta, vals, F, disp_scale = run_scales(system, load, steps_per_cycle, protocol)
     evo = _assembled(system, vals[0], F, initial_slip, protocol)
     x_init = evo.x.copy()
-    starts = [evo.x.copy()]
-    xs, rs, ms, events, diss_hist = [], [], [], [], []
+    history = CycleHistory(disp_scale, record, [evo.x.copy()])
+    starts, events = history.starts, []
     state, residual, totals = "not_converged", np.inf, None
     increment_steady = False
     ratchet = np.zeros(n)
@@ -440,16 +437,9 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
         evo.resync()
         if progress is not None:
             progress(c + 1, cycles)
-        starts.append(evo.x.copy())
+        history.add(evo.x, totals)
         events.append(totals.events)
-        diss_hist.append(float(totals.dissipation.sum()))
-        if record:
-            xs.append(totals.samples["x"])
-            rs.append(totals.samples["r"])
-            ms.append(totals.samples["modes"])
-        xscale = max(disp_scale, float(np.max(np.abs(np.array(starts[-2:])))))
-        d1 = starts[-1] - starts[-2]
-        residual = float(np.max(np.abs(d1))) / xscale
+        d1, xscale, residual = history.increment()
         checking, saved = saved, None
         # the rest of a geometric creep must be below the tolerance too (not after a step)
         near = residual if checking is not None or len(starts) - 2 in targets else \
@@ -496,8 +486,8 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
             # the step did not go where plain cycling goes (it left the piece of the
             # cycle map it was computed on): discard the checking cycle and go on cycling
             # from where the step was taken
-            for lst in (starts, events, diss_hist) + ((xs, rs, ms) if record else ()):
-                lst.pop()
+            history.drop_last()
+            events.pop()
             targets.discard(len(starts) - 1)
             starts[-1], evo.modes, totals, residual, moving_prev = checking[:5]
             evo.x = starts[-1].copy()
@@ -516,12 +506,8 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
                 break
             continue
         if len(starts) >= 3 and len(starts) - 2 not in targets:
-            d0 = starts[-2] - starts[-3]
-            rres = float(np.max(np.abs(d1 - d0))) / xscale
-            # Ratcheting is a drift that repeats; a drift that shrinks by a constant factor
-            # each cycle is a slow approach to a periodic state, not ratcheting.
-            repeats = np.max(np.abs(d1 - d0)) <= 1e-3 * np.max(np.abs(d1))
-            if rres <= tol and repeats:
+            rres = ratchet_residual(starts, d1, xscale, tol)
+            if rres is not None:
                 ratchet = d1[:n]
                 residual = rres
                 state = "ratcheting"
@@ -587,28 +573,16 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     if state == "not_converged" and increment_steady:
         state = "steady"
     return _steady_result(system, evo, state, residual, ratchet, totals, starts, events,
-                          diss_hist, (xs, rs, ms) if record else None, theta, vals, tol,
-                          disp_scale, F, x_init, jstats)
+                          history.dissipation, history.records(), theta, vals, tol, disp_scale, F,
+                          x_init, jstats)
 
 
 
 def _assembled(system: FrictionalSystem, r0: np.ndarray, F: float,
                initial_slip: np.ndarray | None, protocol: np.ndarray | None) -> Evolution:
-    """The evolution at θ = 0: from an admissible initial slip, or assembled from the
-    unloaded state along the protocol's load states (linearly) to the load at θ = 0."""
-    n = system.n_nodes
-    if initial_slip is not None:
-        x0 = initial_state(system, r0, initial_slip, 1e-10 * F)
-        return Evolution(system, x0, r0, F)
-    evo = Evolution(system, np.zeros(2 * n), np.zeros(2 * n), F)
-    path = [np.zeros(2 * n)]
-    if protocol is not None:
-        path += list(np.atleast_2d(protocol))
-    path.append(r0)
-    path = np.array(path)
-    evo.follow(np.arange(len(path), dtype=float), path)
-    evo.resync()
-    return evo
+    """The evolution at θ = 0 (:func:`~slipcycle.coupled.cycles.assemble`)."""
+    return assemble(lambda x0, rw: Evolution(system, x0, rw, F), system, r0, F, initial_slip,
+                    protocol, initial_state)
 
 
 def _steady_result(system, evo, state, residual, ratchet, totals, starts, events, diss_hist,

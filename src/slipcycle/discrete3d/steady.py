@@ -95,6 +95,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import nnls
 
+from slipcycle.coupled.anderson import anderson as _anderson
+from slipcycle.coupled.anderson import geometric as _geometric
+from slipcycle.coupled.cycles import CycleHistory, assemble, ratchet_residual, run_scales
 from slipcycle.coupled.settings import SolverStats
 from slipcycle.coupled.solution import CYCLE_CLASSES, CycleSolution, last_cycle
 from slipcycle.discrete3d.evolution import Evolution3D
@@ -103,7 +106,6 @@ from slipcycle.discrete3d.model import FrictionalSystem3D
 from slipcycle.errors import InadmissibleInitialState
 from slipcycle.kernels.creep import creep_distance
 from slipcycle.kernels.threads import single_threaded
-from slipcycle.loading.nodal import force_scale
 
 __all__ = ["SteadyResult3D", "simulate3d", "initial_state_3d", "InadmissibleInitialState3D",
            "STEADY_CLASSES"]
@@ -267,25 +269,13 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     SteadyResult3D
     """
     n = system.n_nodes
-    theta, vals = load.cycle_samples(steps_per_cycle)
-    F = force_scale(vals if protocol is None else np.vstack([vals, protocol]))
-    disp_scale = F / system.stiffness_scale()
+    theta, vals, F, disp_scale = run_scales(system, load, steps_per_cycle, protocol)
     opts = {"step_tol": step_tol, "adaptive": adaptive, "substeps": substeps,
             "extrapolate": extrapolate}
-    if initial_slip is not None:
-        x0 = initial_state_3d(system, vals[0], initial_slip, 1e-10 * F)
-        evo = Evolution3D(system, x0, vals[0], F, **opts)
-    else:
-        evo = Evolution3D(system, np.zeros(3 * n), np.zeros(3 * n), F, **opts)
-        path = [np.zeros(3 * n)]
-        if protocol is not None:
-            path += list(np.atleast_2d(protocol))
-        path.append(vals[0])
-        path = np.array(path)
-        evo.follow(np.arange(len(path), dtype=float), path)
-        evo.resync()
-    starts = [evo.x.copy()]
-    xs, rs, ms, diss_hist, steps, refs = [], [], [], [], [], []
+    evo = assemble(lambda x0, rw: Evolution3D(system, x0, rw, F, **opts), system, vals[0], F,
+                   initial_slip, protocol, initial_state_3d)
+    history = CycleHistory(disp_scale, record, [evo.x.copy()])
+    starts, steps, refs = history.starts, [], []
     state, residual, totals = "not_converged", np.inf, None
     ratchet = np.zeros(2 * n)
     unresolved = 0
@@ -326,17 +316,10 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
             replaying += 1
             replayed += 1
             mismatches += totals.replay_mismatches
-        starts.append(evo.x.copy())
-        diss_hist.append(float(totals.dissipation.sum()))
+        history.add(evo.x, totals)
         steps.append(totals.steps)
         refs.append(totals.refinements)
-        if record:
-            xs.append(totals.samples["x"])
-            rs.append(totals.samples["r"])
-            ms.append(totals.samples["modes"])
-        xscale = max(disp_scale, float(np.max(np.abs(np.array(starts[-2:])))))
-        d1 = starts[-1] - starts[-2]
-        residual = float(np.max(np.abs(d1))) / xscale
+        d1, xscale, residual = history.increment()
         cyc_tol = max(100 * tol, 1e-9) * xscale
         pat = np.concatenate([totals.slip_length > cyc_tol, totals.separated])
         stalled = False
@@ -415,11 +398,8 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
             verify = True
             continue
         if len(starts) - plain_from >= 3:
-            d0 = starts[-2] - starts[-3]
-            rres = float(np.max(np.abs(d1 - d0))) / xscale
-            # a drift that repeats is ratcheting; one shrinking by a constant factor is a
-            # slow approach to a periodic state
-            if rres <= tol and np.max(np.abs(d1 - d0)) <= 1e-3 * np.max(np.abs(d1)):
+            rres = ratchet_residual(starts, d1, xscale, tol)
+            if rres is not None:
                 ratchet = d1[:2 * n]
                 residual = rres
                 state = "ratcheting"
@@ -471,63 +451,9 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                         replayed_cycles=replayed, replay_freezes=freezes,
                         replay_mismatches=mismatches)
     return SteadyResult3D(
-        residual=residual, cycles_run=len(diss_hist), theta=theta, force_scale=F,
+        residual=residual, cycles_run=len(history.dissipation), theta=theta, force_scale=F,
         steps_per_cycle_taken=steps, refinements_per_cycle=refs,
-        dissipation_history=diss_hist, normal_work=totals.normal_work,
+        dissipation_history=history.dissipation, normal_work=totals.normal_work,
         solver_stats=stats, unresolved_steps=unresolved,
         **last_cycle(system, state, ratchet, totals, starts, tol, disp_scale, vals[0],
-                     (xs, rs, ms) if record else None, len(theta)))
-
-
-def _geometric(states: np.ndarray, spread: float = 1.1) -> bool:
-    """The changes u_i = x_{i+1} − x_i of the sequence ``states`` ((k+2, M)) shrink by
-    ratios |u_{i+1}|/|u_i| < 1 that agree within the factor ``spread``: the error is then
-    dominated by few slowly decaying directions of the cycle map and the extrapolation
-    applies; before that (a pattern still settling) it could overshoot."""
-    norms = np.linalg.norm(np.diff(states, axis=0), axis=1)
-    if np.any(norms == 0.0):
-        return False
-    ratios = norms[1:] / norms[:-1]
-    return bool(ratios.max() < 1.0 and ratios.max() <= spread * ratios.min())
-
-
-def _anderson(X: np.ndarray, F: np.ndarray, max_gain: float = 1e4) -> np.ndarray | None:
-    """Anderson (reduced rank) extrapolation of a fixed point of P from secant pairs.
-
-    Parameters
-    ----------
-    X, F : (k + 1, M) arrays
-        Cycle starts x_i and their images F_i = P(x_i). For a plain sequence
-        (x_{i+1} = F_i) this is reduced rank extrapolation (Sidi, Ford & Smith, SIAM J.
-        Numer. Anal. 23, 1986); with jumped starts it is Anderson mixing (Anderson, J. ACM
-        12, 1965; Walker & Ni, SIAM J. Numer. Anal. 49, 2011), equivalent to GMRES on a
-        linear map.
-    max_gain : float
-        The jump from F_k may be at most this many times the last change |F_k − x_k|
-        (a ratio of the sequence up to 1 − 1/max_gain); larger ones are refused.
-
-    Returns
-    -------
-    (M,) array or None
-        x* = Σ α_i F_i with Σ α_i = 1 minimising |Σ α_i (F_i − x_i)|; components that
-        no pair moves are returned unchanged (a node stuck in every cycle keeps its
-        slip). None if the problem is degenerate or the jump is implausibly large.
-    """
-    U = F - X                                      # (k+1, M) residuals
-    moving = np.flatnonzero(np.any(U != 0.0, axis=0) | np.any(X != X[-1], axis=0))
-    last = float(np.max(np.abs(U[-1]))) if moving.size else 0.0
-    if last == 0.0:
-        return None
-    Um = U[:, moving] / last
-    # α_k = 1 − Σ_{i<k} α_i: min |u_k + Σ_{i<k} α_i (u_i − u_k)|, a least-squares problem
-    # solved by the SVD (minimum norm where the residuals are linearly dependent)
-    W = (Um[:-1] - Um[-1]).T
-    g = np.linalg.lstsq(W, -Um[-1], rcond=1e-12)[0]
-    if not np.all(np.isfinite(g)):
-        return None
-    alpha = np.append(g, 1.0 - g.sum())
-    x = F[-1].copy()
-    x[moving] = alpha @ F[:, moving]
-    if float(np.max(np.abs(x - F[-1]))) > max_gain * last:
-        return None
-    return x
+                     history.records(), len(theta)))
