@@ -34,8 +34,9 @@ CALL = re.compile(r"^([a-z_][a-z0-9_]*)\(")
 DOTTED = re.compile(r"^[a-z_][a-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)+(:[A-Za-z_]\w*)?$")
 CONTRACT_ID = re.compile(r"^[a-z]+(-[a-z]+)+$")
 FILE = re.compile(r"^[A-Za-z0-9_./-]+(/|\.py|\.toml|\.json|\.md|\.nc|\.png)$")
-#: names of the standard library the page uses
+#: names and modules of the standard library the page uses
 STDLIB = {"Path"}
+STDLIB_MODULES = {"functools"}
 
 
 def _text() -> str:
@@ -148,6 +149,8 @@ def test_every_named_class_constant_and_function_exists():
 def _resolves(dotted: str) -> bool:
     name, _, attr = dotted.partition(":")
     parts = name.split(".")
+    if parts[0] in STDLIB_MODULES:
+        return callable(getattr(importlib.import_module(parts[0]), parts[-1], None))
     if parts[0] != "slipcycle":
         parts = ["slipcycle", *parts]
     for i in range(len(parts), 0, -1):
