@@ -3,13 +3,14 @@
 - :class:`InputError`: the input is invalid (a key of a case file, a command-line option, a
   matrix of a model, a file). ``key`` names what is at fault, ``problem`` says why. The
   command line prints ``error: <key>: <problem>`` on one line and exits with code 2.
-  :class:`slipcycle.io.CaseError`, :class:`slipcycle.sweep.SweepError`,
+  :class:`CaseError` (a key of a case file; also :class:`slipcycle.io.CaseError`),
+  :class:`slipcycle.sweep.SweepError`,
   :class:`slipcycle.io.matrices.StiffnessError` and :class:`ModelError` (a model object,
   with an optional remedy) are its kinds.
 - :class:`SolverError`: a valid model on which a solver could not proceed (exit code 3).
 """
 
-__all__ = ["InputError", "ModelError", "SolverError", "InadmissibleInitialState"]
+__all__ = ["InputError", "CaseError", "ModelError", "SolverError", "InadmissibleInitialState"]
 
 
 class InputError(ValueError):
@@ -19,6 +20,15 @@ class InputError(ValueError):
         self.key = key
         self.problem = problem
         super().__init__(f"{key}: {problem}" if key else problem)
+
+
+class CaseError(InputError):
+    """A case file (or a file or option of a command) is invalid. ``key`` is the dotted
+    path of the offending key (``halfspace.radius``) or the option (``--out``).
+
+    It lives here, beside :class:`InputError`, so that every reader and checker of
+    :mod:`slipcycle.io` can raise it without importing :mod:`slipcycle.io.case`.
+    """
 
 
 class ModelError(InputError):

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from slipcycle.errors import InputError
+from slipcycle.errors import CaseError
 from slipcycle.io.files import check_input_file
 from slipcycle.io.sniff import describe
 from slipcycle.registry import MODEL_COMMANDS
@@ -31,10 +31,6 @@ __all__ = ["Case", "CaseError", "Section", "read_case", "parse_case_text", "MODE
 MAX_CASE_BYTES = 64 * 1024 * 1024
 
 _MISSING = object()
-
-
-class CaseError(InputError):
-    """A case file is invalid. ``key`` is the dotted path of the offending key."""
 
 
 def _join(prefix: str, key: str) -> str:

@@ -17,6 +17,8 @@ import stat
 from collections.abc import Iterable
 from pathlib import Path
 
+from slipcycle.errors import CaseError
+
 __all__ = ["check_input_file", "check_no_overwrite", "resolved"]
 
 _KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
@@ -24,8 +26,6 @@ _KINDS = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device")
 
 
 def _error(key: str, problem: str):
-    from slipcycle.io.case import CaseError
-
     return CaseError(key, problem)
 
 

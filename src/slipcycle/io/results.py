@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from slipcycle.errors import CaseError
 from slipcycle.io.metadata import provenance
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -441,8 +442,6 @@ def write_together(outputs: list[tuple[Path, Callable[[Path], None]]]) -> None:
 
 
 def _output_error(path: Path, exc: OSError):
-    from slipcycle.io.case import CaseError
-
     # name what the user asked for, not a staging name they never saw
     return CaseError(str(path), f"cannot write: {exc.strerror or exc}")
 
@@ -455,8 +454,6 @@ def _first_existing(path: Path) -> Path:
 
 
 def _check_parent_writable(path: Path) -> None:
-    from slipcycle.io.case import CaseError
-
     anchor = _first_existing(Path(path).parent if not Path(path).exists() else path)
     if not anchor.is_dir():
         raise CaseError(str(path), f"cannot be created: {anchor} is a file, not a directory")
@@ -470,8 +467,6 @@ def check_output_dir(path: str | Path) -> None:
     Raises :class:`~slipcycle.io.CaseError` naming the path when it is an existing file, or
     when neither it nor its nearest existing parent can be written.
     """
-    from slipcycle.io.case import CaseError
-
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise CaseError(str(path), "exists and is not a directory; choose another --out")
@@ -485,8 +480,6 @@ def check_output_dir(path: str | Path) -> None:
 def check_output_file(path: str | Path) -> None:
     """Refuse, before any work, an output file that cannot be written (see
     :func:`check_output_dir`)."""
-    from slipcycle.io.case import CaseError
-
     path = Path(path)
     if path.is_dir():
         raise CaseError(str(path), "is a directory; give a file name")

@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 import re
 
-from slipcycle.errors import InputError
+from slipcycle.errors import CaseError, InputError
 
 __all__ = ["MEMORY_LIMIT", "memory_limit", "format_bytes", "check_memory"]
 
@@ -73,8 +73,6 @@ def check_memory(key: str, nbytes: float, what: str, limit: float | None = None,
     slipcycle.io.CaseError
         ``key: <what> need about <size> of memory (limit 4 GB); <advice> (...)``.
     """
-    from slipcycle.io.case import CaseError
-
     limit = memory_limit() if limit is None else limit
     if nbytes > limit:
         tail = f"; {advice}" if advice else ""
