@@ -151,22 +151,28 @@ def test_slow_mode_steps_keep_plain_cyclings_memory_whenever_they_start(monkeypa
                                                       abs=0)
 
 
-def test_a_slow_mode_step_that_runs_past_a_stop_lands_on_another_periodic_state(
+def test_a_slow_mode_step_that_runs_past_a_stop_still_ends_on_a_periodic_state(
         monkeypatch):
     """Why every step ends where the first node stops: without that limit, the steps
-    (starting after three cycles, the default) on the 41-node block end on a periodic
-    state (residual below 1e-12) whose D is 1.16e-5 off plain cycling's, another member
-    of the set of periodic states (Barber 2012 §3), not a worse convergence. The steps
-    start here from a creep ratio of 0.5, earlier in the transient, where more nodes are
-    still to stop (from the default 0.8 the same steps end 1.1e-7 off)."""
+    (starting here from a creep ratio of 0.5, earlier in the transient, where more nodes
+    are still to stop) on the 41-node block still end on a periodic state (residual below
+    the tolerance asked for), but which member of the set of periodic states (Barber 2012
+    §3) they reach depends on the last bits of the path: D is 1.16e-5 off plain
+    cycling's when this module runs alone and 9.3e-9 off in a process that loaded only
+    this test (the same AMD EPYC), 1.5e-8 with OPENBLAS_CORETYPE=Haswell and 5.0e-7 with
+    Prescott (residuals 2.0e-12 to 7.7e-12). Only what the algorithm guarantees is
+    asserted: the class, the residual below its tolerance, and D within the spread of
+    those periodic states (1e-4).
+    """
     system, load, protocol = slid_block(20)
     monkeypatch.setattr(steady, "_before_a_stop", lambda *args: 1.0)
     monkeypatch.setattr(steady, "SLOW_CREEP", 0.5)
+    tol = 1e-11
     run = simulate(system, load, cycles=200, steps_per_cycle=50, protocol=protocol,
-                   record=False, tol=1e-11, slow_modes=True)
-    assert run.steady_state == "cyclic_slip" and run.residual < 1e-12
+                   record=False, tol=tol, slow_modes=True)
+    assert run.steady_state == "cyclic_slip" and run.residual < tol
     rel = abs(run.dissipation_per_cycle - 3.1769966252792746e-07) / 3.1769966252792746e-07
-    assert rel == pytest.approx(1.16e-5, rel=0.05)
+    assert rel < 1e-4
 
 
 def _random_slip(seed, system, load):
