@@ -124,8 +124,8 @@ def block_deck(nx: int = 4, ny: int = 4, nz: int = 2, size=(0.01, 0.01, 0.005),
     lines += ["*ELSET, ELSET=ETOP"] + [str(i) for i in top_el]
     lines += ["*SURFACE, NAME=SBOTTOM, TYPE=ELEMENT", "EBOTTOM, S1",
               "*SURFACE, NAME=STOP, TYPE=ELEMENT", "ETOP, S2",
-              "*MATERIAL, NAME=STEEL", "*ELASTIC", f"{E:.17g}, {nu:.17g}",
-              "*DENSITY", f"{density:.17g}",
+              "*MATERIAL, NAME=STEEL", "*ELASTIC", f"{float(E)!r}, {float(nu)!r}",
+              "*DENSITY", f"{float(density)!r}",
               "*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL"]
     if step == "sti":
         lines += ["*STEP", "*FREQUENCY, SOLVER=MATRIXSTORAGE", "*END STEP"]

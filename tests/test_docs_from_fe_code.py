@@ -51,6 +51,9 @@ def _run(command: str, run_cli) -> str:
 def test_calculix_worked_example_runs_and_quotes_its_numbers(tmp_path, run_cli, monkeypatch):
     require_ccx()
     text = PAGE.read_text(encoding="utf-8")
+    deck = re.search(r"```text\n(\*MATERIAL.*?)```", text, re.S).group(1)
+    shipped = (PAGE.parents[1] / "src" / "slipcycle" / "examples" / "calculix_block.inp")
+    assert deck in shipped.read_text(), "the deck quoted is not the shipped deck's end"
     monkeypatch.chdir(tmp_path)
     commands = _console(text)
     assert [c for c, _ in commands] == [

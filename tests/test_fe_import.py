@@ -478,3 +478,22 @@ def test_gmsh_mesh_with_physical_groups_gives_the_decks_reduction(tmp_path):
             assert _rel(by_gmsh.reduced.loads[name][part],
                         by_deck.reduced.loads[name][part]) < 1e-12, (name, part)
     np.testing.assert_allclose(by_gmsh.area, by_deck.area, rtol=1e-12)
+
+
+def test_deck_in_millimetres_gives_the_si_decks_reduction(tmp_path):
+    si = import_joint(read_import_model(_block(tmp_path / "si")))
+    mm = tmp_path / "mm"
+    run_ccx(block_deck(4, 4, 2, size=(10.0, 10.0, 5.0), E=E * 1e-6, nu=NU, density=7.8e-9),
+            mm, "block")
+    text = (tmp_path / "si" / "model.toml").read_text()
+    (mm / "model.toml").write_text(text.replace('contact = "SBOTTOM"',
+                                                'contact = "SBOTTOM"\nunits = "mm"'))
+    got = import_joint(read_import_model(mm / "model.toml"))
+    for k in "ABC":
+        assert _rel(getattr(got.reduced, k), getattr(si.reduced, k)) < 1e-10, k
+    for name in ("normal", "tangential", "side"):
+        for part in ("q", "p"):
+            assert _rel(got.reduced.loads[name][part], si.reduced.loads[name][part]) < 1e-10
+    np.testing.assert_allclose(got.reduced.coordinates, si.reduced.coordinates, rtol=1e-14,
+                               atol=1e-18)
+    np.testing.assert_allclose(got.area, si.area, rtol=1e-12)

@@ -39,7 +39,7 @@ from slipcycle.condensation import SingularModelError
 from slipcycle.errors import InputError
 from slipcycle.fe.contact3d import Case3D, condense_contact_3d
 from slipcycle.fe_import.mesh import ImportedMesh, read_mesh
-from slipcycle.fe_import.model import BodySpec, ImportModel
+from slipcycle.fe_import.model import UNITS, BodySpec, ImportModel
 from slipcycle.fe_import.surface import node_areas, node_normals, pressure_forces, surface_nodes
 from slipcycle.io.case import CaseError
 from slipcycle.io.fe_formats import detect_format, read_raw
@@ -185,8 +185,10 @@ def _set_nodes(mesh: ImportedMesh, name: str, key: str) -> np.ndarray:
 
 def read_body(spec: BodySpec) -> ImportedBody:
     """Read one body's export and mesh, its contact surface and its checks."""
-    mesh = read_mesh(spec.mesh, f"{spec.key}.mesh", spec.scale)
+    length, stiff = UNITS[spec.units]
+    mesh = read_mesh(spec.mesh, f"{spec.key}.mesh", length)
     raw, K, fmt = _read_export(spec)
+    K = K * stiff
     dofs, foreign = _rows(raw, K, mesh, spec)
     absent = dofs < 0
     extra = int(absent.sum())

@@ -8,7 +8,7 @@
     [[fe_import.body]]          # one body (on a rigid counter-surface) or two
     stiffness = "block.sti"     # the export (format from the file, or format = "...")
     mesh = "block.inp"          # the deck, or any mesh meshio reads
-    scale = 1.0                 # mesh coordinates × scale = metres
+    units = "m"                 # the deck's units: "m" (m, N, Pa) or "mm" (mm, N, MPa)
     contact = "SBOTTOM"         # a surface (element faces) or a node set on the surface
     clamped = []                # node sets (or surfaces) held at u = 0 in every case
     [[fe_import.load]]          # one load case each, named
@@ -36,9 +36,13 @@ from slipcycle.fe.model import read_discrete_table
 from slipcycle.io.case import CaseError, Section, read_case
 from slipcycle.io.fe_formats import FORMATS
 
-__all__ = ["BodySpec", "LoadSpec", "ImportModel", "read_import_model", "MODEL"]
+__all__ = ["BodySpec", "LoadSpec", "ImportModel", "read_import_model", "MODEL", "UNITS"]
 
 MODEL = "fe_import"
+
+#: consistent unit systems of a deck → (metres per length unit, N/m per stiffness unit):
+#: "mm" is mm, N, MPa (t/mm³), so that K is in N/mm
+UNITS = {"m": (1.0, 1.0), "mm": (1e-3, 1e3)}
 
 
 @dataclass(frozen=True)
@@ -49,7 +53,7 @@ class BodySpec:
     mesh: Path
     contact: str
     clamped: tuple = ()
-    scale: float = 1.0
+    units: str = "m"
     format: str | None = None
     key: str = "fe_import.body[0]"
 
@@ -94,7 +98,8 @@ def _body(b: Section) -> BodySpec:
     fmt = b.string("format", None, choices=FORMATS) if b.has("format") else None
     spec = BodySpec(stiffness=b.path("stiffness"), mesh=b.path("mesh"),
                     contact=b.string("contact"), clamped=_names(b, "clamped"),
-                    scale=b.float("scale", 1.0, gt=0.0), format=fmt, key=b.prefix)
+                    units=b.string("units", "m", choices=tuple(UNITS)), format=fmt,
+                    key=b.prefix)
     b.finish()
     return spec
 
