@@ -25,6 +25,7 @@ from slipcycle.fe.contact3d import Case3D, condense_contact_3d  # noqa: E402
 from slipcycle.fe.files import _savez, _stiffness_arrays  # noqa: E402
 from slipcycle.fe.model import discrete3d_case_text  # noqa: E402
 from slipcycle.fe_import import import_joint, read_import_model, write_import  # noqa: E402
+from slipcycle.io.case import CaseError  # noqa: E402
 
 E, NU, SIZE = 210e9, 0.3, (0.01, 0.01, 0.005)
 #: the mesh of the periodic runs: 49 contact nodes (the sampled critical friction of
@@ -497,3 +498,94 @@ def test_deck_in_millimetres_gives_the_si_decks_reduction(tmp_path):
     np.testing.assert_allclose(got.reduced.coordinates, si.reduced.coordinates, rtol=1e-14,
                                atol=1e-18)
     np.testing.assert_allclose(got.area, si.area, rtol=1e-12)
+
+
+# -- the other codes' export formats carry the same K ----------------------------------------
+
+def _export(fmt: str, tmp: Path, K, labels) -> str:
+    import fe_export_writers as w
+
+    if fmt == "abaqus":
+        return w.abaqus_matrix_input(tmp / "job_STIF1.mtx", K, labels).name
+    if fmt == "harwell-boeing":
+        return w.harwell_boeing(tmp / "block.rsa", K, labels).name
+    if fmt == "matlab":
+        return w.matlab_v5(tmp / "block.mat", K, labels).name
+    if fmt == "nastran-dmig":
+        return w.nastran_dmig_punch(tmp / "block.pch", K, labels).name
+    order = np.lexsort((labels[:, 1], labels[:, 0]))          # x, y, z node by node
+    return w.matrix_market(tmp / "block_mm.mtx", K[np.ix_(order, order)]).name
+
+
+@pytest.mark.parametrize(("fmt", "digits"), [("abaqus", 1e-12), ("harwell-boeing", 1e-10),
+                                              ("matlab", 1e-12), ("nastran-dmig", 1e-8),
+                                              ("matrix-market", 1e-12)])
+def test_other_codes_exports_of_the_same_k_give_the_same_reduction(tmp_path, fmt, digits):
+    """The ccx stiffness written in each code's layout (tests/fe_export_writers.py, written
+    independently of the readers): the same A, B, C and load cases, to the digits each
+    layout stores."""
+    from slipcycle.io.fe_formats import read_raw
+
+    path = _block(tmp_path)
+    ref = import_joint(read_import_model(path))
+    raw = read_raw(tmp_path / "block.sti", "calculix", None)
+    K = raw.K.toarray()
+    name = _export(fmt, tmp_path, K, np.asarray(raw.labels))
+    path.write_text(path.read_text().replace('"block.sti"', f'"{name}"'))
+    got = import_joint(read_import_model(path))
+    for k in "ABC":
+        assert _rel(getattr(got.reduced, k), getattr(ref.reduced, k)) < digits, k
+    for case in ("normal", "tangential", "side"):
+        for part in ("q", "p"):
+            assert _rel(got.reduced.loads[case][part], ref.reduced.loads[case][part]) < digits
+
+
+def test_calculix_substructure_export_is_refused_naming_the_sti_route(tmp_path, run_cli):
+    """CalculiX 2.20's *SUBSTRUCTURE MATRIX OUTPUT is the uncondensed block of the retained
+    dofs (issue 30): refused in one line that names the .sti route."""
+    path = _block(tmp_path)
+    deck = block_deck(4, 4, 2, size=SIZE, E=E, nu=NU, step=None) + (
+        "*BOUNDARY\nTOP, 1, 3\n*STEP\n*SUBSTRUCTURE GENERATE\n*RETAINED NODAL DOFS\n"
+        "BOTTOM, 1, 3\n*SUBSTRUCTURE MATRIX OUTPUT, STIFFNESS=YES, OUTPUT FILE=USER DEFINED, "
+        "FILE NAME=sub\n*END STEP\n")
+    run_ccx(deck, tmp_path / "sub", "sub")
+    path.write_text(path.read_text().replace('"block.sti"', '"sub/sub.mtx"'))
+    code, _, err = run_cli("reduce", path, "--out", tmp_path / "out")
+    assert code == 2 and err.count("\n") == 1 and not (tmp_path / "out").exists()
+    assert "fe_import.body[0].stiffness" in err and "sub.mtx" in err and ".sti" in err
+
+
+def test_abaqus_substructure_of_contact_and_grip_nodes_gives_the_sti_reduction(tmp_path):
+    """A condensed export of the retained contact and grip nodes (Abaqus *SUBSTRUCTURE
+    GENERATE, written as its user element; here the Schur complement of the ccx K) supplies
+    A, B, C and the grip's load cases; a force on a node it does not hold is refused."""
+    import fe_export_writers as w
+
+    from slipcycle.fe_import.mesh import read_deck
+    from slipcycle.io.fe_formats import read_raw
+
+    path = _block(tmp_path)
+    text = path.read_text()
+    path.write_text(text[:text.index("[[fe_import.load]]\nname = \"side\"")]
+                    + text[text.index("[fe_import.discrete]"):])
+    ref = import_joint(read_import_model(path))
+    raw = read_raw(tmp_path / "block.sti", "calculix", None)
+    K, labels = raw.K.toarray(), np.asarray(raw.labels)
+    mesh = read_deck(tmp_path / "block.inp", "mesh")
+    keep = set(mesh.labels[np.concatenate([mesh.node_sets["BOTTOM"], mesh.node_sets["TOP"]])])
+    b = np.flatnonzero([lab in keep for lab in labels[:, 0]])
+    i = np.setdiff1d(np.arange(len(K)), b)
+    S = K[np.ix_(b, b)] - K[np.ix_(b, i)] @ np.linalg.solve(K[np.ix_(i, i)], K[np.ix_(i, b)])
+    w.abaqus_user_element(tmp_path / "sub.mtx", 0.5 * (S + S.T), labels[b])
+    path.write_text(path.read_text().replace('"block.sti"', '"sub.mtx"'))
+    got = import_joint(read_import_model(path))
+    for k in "ABC":
+        assert _rel(getattr(got.reduced, k), getattr(ref.reduced, k)) < 1e-9, k
+    for case in ("normal", "tangential"):
+        for part in ("q", "p"):
+            assert _rel(got.reduced.loads[case][part], ref.reduced.loads[case][part]) < 1e-9
+    path.write_text(path.read_text() + '[[fe_import.load]]\nname = "side"\nnodes = "SIDE"\n'
+                    'force = [1.0, 0.0, 0.0]\n')
+    with pytest.raises(CaseError, match=r"fe_import.load\[2\].nodes: node \d+ of 'SIDE' has "
+                                        "no row in the export"):
+        import_joint(read_import_model(path))
