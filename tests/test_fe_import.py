@@ -589,3 +589,10 @@ def test_abaqus_substructure_of_contact_and_grip_nodes_gives_the_sti_reduction(t
     with pytest.raises(CaseError, match=r"fe_import.load\[2\].nodes: node \d+ of 'SIDE' has "
                                         "no row in the export"):
         import_joint(read_import_model(path))
+
+
+def test_out_must_be_a_directory(tmp_path, run_cli):
+    path = _block(tmp_path)
+    code, _, err = run_cli("reduce", path, "--out", tmp_path / "reduced.npz")
+    assert code == 2 and err.count("\n") == 1 and "--out" in err and "directory" in err
+    assert not (tmp_path / "reduced.npz").exists()

@@ -49,8 +49,9 @@ def write_import(model: ImportModel, joint: ImportedJoint, out: str | Path) -> l
         The files written.
     """
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise CaseError("--out", f"{out} is a file; give a directory")
+    if (out.exists() and not out.is_dir()) or out.suffix.lower() == ".npz":
+        raise CaseError("--out", f"{out} is a file; an fe_import model writes a directory "
+                        f"({', '.join(OUTPUT_FILES)})")
     meta = provenance(model.text, model.path)
     data = _stiffness_arrays(joint.reduced, meta)
     text = discrete3d_case_text(model.discrete, joint.reduced, "stiffness.npz", joint.area,
@@ -80,6 +81,9 @@ def reduce_import(path: str | Path, out: str | Path) -> dict:
         One line naming the key at fault; nothing is written.
     """
     model = read_import_model(path)
+    if Path(out).suffix.lower() == ".npz":                 # said before the work is done
+        raise CaseError("--out", f"{out} is a file; an fe_import model writes a directory "
+                        f"({', '.join(OUTPUT_FILES)})")
     joint = import_joint(model)
     written = write_import(model, joint, out)
     return {**joint.report, "written": [str(p) for p in written]}
