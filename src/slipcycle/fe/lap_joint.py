@@ -20,8 +20,9 @@ case                unit what
 ``bolt_k``          N    preload of bolt k: a uniform pressure on its washer annulus
                          (hole radius to washer radius) pushing the upper plate down
                          (−z, on z = t) and the lower plate up (+z, on z = −t), 1 N
-                         resultant on each plate; the bolt is a constant force (its
-                         own stiffness is not modelled)
+                         resultant on each plate; with elastic bolts
+                         (``bolt_modulus`` > 0) the study adds each bolt's shank as a
+                         spring between its washer faces (``bolt_shortening`` below)
 ``service``         N    upper grip moved along +x (along the plates: the lap-shear
                          load), scaled to 1 N grip force on the upper plate while the
                          interface is stuck
@@ -31,6 +32,21 @@ case                unit what
                          −[Bᵀ g; C g] of the initial gap g, applied once (the
                          separation w includes g)
 =================== ==== ============================================================
+
+Elastic bolts. The grip shortening s_k = f_kᵀ u of bolt k (f_k its washer forces per
+newton, u the displacement field: the approach of its two washer faces, work-conjugate to
+its force) is, by the reciprocal theorem, s_k = Σ_j Φ_kj α_j − r_kᵀ d_true for load
+amplitudes α_j, load-case reactions r_j = [q_j; p_j] and the interface displacement
+d_true = [v; w − g]; Φ_kj (m per unit of case j) is the shortening with the interface
+bonded (d_true = 0), computed here by one extra bonded solve (``bolt_shortening``). A
+shank of stiffness k_b = E_b π d_b²/4 / L_b (``bolt_modulus``, ``bolt_shank_diameter``,
+``bolt_length``) carries T_k = k_b (e_k − s_k), e_k the shortening of its free length by
+the nut (the pretension dof of FE codes); eliminating the locked bolts adds
+R D Rᵀ to the reduced stiffness, D = (k_b⁻¹ I + Φ)⁻¹
+(:mod:`slipcycle.joints.lap_joint_protocol`).
+
+Dissimilar plates. ``E``, ``nu`` are the upper plate's, ``E_lower``, ``nu_lower`` the
+lower plate's (default: the same): an aluminium plate on a steel one has Dundurs' β ≠ 0.
 
 The service cases are displacement-controlled (a testing machine's grip) but normalised
 per newton: with the interface stuck the grip force along the motion is exactly 1 N,
@@ -90,14 +106,21 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
 from scipy.spatial import cKDTree
+from skfem import Basis, ElementTetP1, ElementVector, MeshTet
 
 from slipcycle.errors import InputError
+from slipcycle.fe.assembly import stiffness
+from slipcycle.fe.contact3d import Case3D, condense_contact_3d, node_dofs_3d
 from slipcycle.fe.geometry import check_number
+from slipcycle.fe.hex8i import hex8i_stiffness
+from slipcycle.fe.lap_joint_mesh import cell_weights, extrude_hexes, extrude_tets, plan_mesh
 from slipcycle.io.matrices import ReducedStiffness
 
-__all__ = ["LapJoint", "LapJointModel", "LapJointMesh", "lap_joint_model", "lap_joint_mesh",
-           "bolt_centres"]
+__all__ = ["LapJoint", "LapJointModel", "LapJointMesh", "LapJointFE", "lap_joint_model",
+           "lap_joint_mesh", "lap_joint_fe", "bonded_shortening", "bolt_centres"]
 
 #: elements with positive consistent nodal forces of a pressure, which node-to-node friction
 #: needs (those of quadratic triangles vanish at the vertices): linear tetrahedra and
@@ -158,6 +181,18 @@ class LapJoint:
         incomplete").
     end_relief_depth : float
         The recess δ at the plate end, m (> 0 exactly when ``end_relief`` > 0).
+    E_lower, nu_lower : float, optional
+        Young's modulus (Pa) and Poisson's ratio of the lower plate (default ``E``,
+        ``nu``: identical plates); ``E``, ``nu`` are then the upper plate's.
+    bolt_modulus : float
+        Young's modulus E_b of the bolt shanks, Pa; 0 (default): constant-force bolts
+        (the limit of a soft bolt, whose force does not change once applied).
+    bolt_shank_diameter : float, optional
+        Diameter d_b of the shanks, m (default ``bolt_diameter``/1.1, the medium
+        clearance hole of ISO 273).
+    bolt_length : float, optional
+        Free length L_b of the shanks between the washer faces, m (default the grip,
+        2 ``thickness``).
     """
 
     plate_length: float = 0.1
@@ -177,6 +212,11 @@ class LapJoint:
     refine: int = 0
     end_relief: float = 0.0
     end_relief_depth: float = 0.0
+    E_lower: float | None = None
+    nu_lower: float | None = None
+    bolt_modulus: float = 0.0
+    bolt_shank_diameter: float | None = None
+    bolt_length: float | None = None
     _centres: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -189,6 +229,19 @@ class LapJoint:
         if self.layers is not None:
             check_number("layers", self.layers, ge=1, le=200, integer=True)
         check_number("refine", self.refine, ge=0, le=3, integer=True)
+        if self.E_lower is not None:
+            check_number("E_lower", self.E_lower, gt=0.0)
+        if self.nu_lower is not None:
+            check_number("nu_lower", self.nu_lower, ge=0.0, lt=0.5)
+        check_number("bolt_modulus", self.bolt_modulus, ge=0.0)
+        for name in ("bolt_shank_diameter", "bolt_length"):
+            if getattr(self, name) is not None:
+                check_number(name, getattr(self, name), gt=0.0)
+        if self.bolt_shank_diameter is not None and \
+                self.bolt_shank_diameter > self.bolt_diameter:
+            raise InputError("bolt_shank_diameter", "must not exceed the hole diameter "
+                             f"bolt_diameter ({self.bolt_diameter:g} m), got "
+                             f"{self.bolt_shank_diameter:g}")
         check_number("end_relief", self.end_relief, ge=0.0)
         check_number("end_relief_depth", self.end_relief_depth, ge=0.0)
         if (self.end_relief > 0) != (self.end_relief_depth > 0):
@@ -263,6 +316,22 @@ class LapJoint:
                      - self.washer_diameter / 2)
 
     @property
+    def materials(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """((E, ν) of the upper plate, (E, ν) of the lower plate), Pa and 1."""
+        lower = (self.E if self.E_lower is None else self.E_lower,
+                 self.nu if self.nu_lower is None else self.nu_lower)
+        return (float(self.E), float(self.nu)), (float(lower[0]), float(lower[1]))
+
+    @property
+    def bolt_stiffness(self) -> float:
+        """Axial stiffness k_b = E_b π d_b²/4 / L_b of each bolt shank, N/m (0: constant-
+        force bolts)."""
+        d = self.bolt_diameter / 1.1 if self.bolt_shank_diameter is None \
+            else self.bolt_shank_diameter
+        length = 2 * self.thickness if self.bolt_length is None else self.bolt_length
+        return float(self.bolt_modulus * math.pi * d ** 2 / 4 / length)
+
+    @property
     def layer_count(self) -> int:
         """Elements through each plate's thickness."""
         if self.layers is not None:
@@ -320,6 +389,13 @@ class LapJointModel:
         Geometry, mesh and timings (name → value) for reports; with
         ``<case>_grip_stiffness_N_per_m``, the grip force per metre of grip motion of each
         service case while the interface is stuck (the factor the case was divided by).
+    bolt_shortening : dict
+        Load case name → (K,) grip shortening Φ_kj of every bolt per unit of the case with
+        the interface bonded, m per unit (module docstring, "Elastic bolts"); the rows
+        of the ``bolt_j`` cases form the bonded joint's bolt compliance (K, K), m/N,
+        symmetric.
+    bolt_stiffness : float
+        k_b of each bolt shank, N/m (0: constant-force bolts).
     """
 
     reduced: ReducedStiffness
@@ -329,6 +405,8 @@ class LapJointModel:
     spacing: float
     grip_share: np.ndarray
     description: dict
+    bolt_shortening: dict = field(default_factory=dict)
+    bolt_stiffness: float = 0.0
 
     @property
     def n_nodes(self) -> int:
@@ -368,10 +446,8 @@ class LapJointMesh:
     ranges: tuple
 
     @property
-    def mesh(self):
+    def mesh(self) -> MeshTet:
         """The tetrahedra as a :class:`skfem.MeshTet` (P1 meshes only)."""
-        from skfem import MeshTet
-
         if self.cells.shape[0] != 4:
             raise ValueError("a hexahedral lap-joint mesh has no MeshTet")
         return MeshTet(self.points, self.cells)
@@ -380,8 +456,6 @@ class LapJointMesh:
 def lap_joint_mesh(joint: LapJoint) -> LapJointMesh:
     """Tetrahedral (P1) or hexahedral (H8I) mesh of both plates with duplicated
     (coincident) interface nodes (:mod:`slipcycle.fe.lap_joint_mesh`)."""
-    from slipcycle.fe.lap_joint_mesh import extrude_hexes, extrude_tets, plan_mesh
-
     L, c, t, h = joint.plate_length, joint.overlap, joint.thickness, joint.mesh_size
     a, b = -c / 2, c / 2
     x0, x1 = b - L, L - c / 2
@@ -407,8 +481,6 @@ def _washer_forces(m: LapJointMesh, xyz: np.ndarray, joint: LapJoint, k: int) ->
     """Nodal forces (n_nodes, 3) of bolt k's washer pressures, 1 N on each plate, N: the
     consistent forces of a uniform pressure on the plan cells of the annulus (hole radius
     to washer radius; the washer circle is a mesh line) on the faces z = ±t."""
-    from slipcycle.fe.lap_joint_mesh import cell_weights
-
     t = joint.thickness
     cx, cy = joint.centres[k]
     rh, rw = joint.bolt_diameter / 2, joint.washer_diameter / 2
@@ -432,41 +504,77 @@ def _node_area(m: LapJointMesh, coords: np.ndarray) -> np.ndarray:
     """Tributary area (N,) of the contact nodes at ``coords`` (N, 3): ∫ N_a dA over the
     interface cells (a third of each triangle, the bilinear share of each quadrilateral),
     m²."""
-    from slipcycle.fe.lap_joint_mesh import cell_weights
-
     weights = cell_weights(m.plan_points, m.interface_cells)
     _, idx = cKDTree(m.plan_points).query(coords[:, :2])
     return weights[idx]
 
 
-def lap_joint_model(joint: LapJoint) -> LapJointModel:
-    """Mesh the lap joint, reduce it to the contact nodes of its overlap (one factorisation).
+@dataclass(frozen=True)
+class LapJointFE:
+    """The finite-element problem of the joint before its reduction.
 
-    Parameters
+    Attributes
     ----------
-    joint : LapJoint
-        Geometry (m), material (Pa), bolts and mesh.
+    mesh : LapJointMesh
+    stiffness : scipy.sparse.csr_matrix, shape (n, n)
+        Both plates, unsupported, N/m (each plate its own material).
+    dofs : numpy.ndarray of int, shape (n_nodes, 3)
+        DOF indices (x, y, z) of every node.
+    element : str
+        The element's label for the provenance.
+    pairs : numpy.ndarray of int, shape (N, 2)
+        Upper and lower node of each contact pair, ordered by (y, x).
+    fixed : numpy.ndarray of bool, shape (n_nodes, 3)
+        The held components (both grips).
+    cases : tuple of Case3D
+        ``bolt_k`` (washer forces, 1 N) and the service grip motions (1 m).
+    gap : numpy.ndarray, shape (N,)
+        Initial gap of the rounded ends, m.
+    """
+
+    mesh: LapJointMesh
+    stiffness: sp.csr_matrix
+    dofs: np.ndarray
+    element: str
+    pairs: np.ndarray
+    fixed: np.ndarray
+    cases: tuple
+    gap: np.ndarray
+
+
+#: the service cases: name and the grip's direction of motion (x, y, z)
+_SERVICES = (("service", 0), ("service_y", 1), ("service_z", 2))
+
+
+def _assemble(m: LapJointMesh, joint: LapJoint) -> tuple[sp.csr_matrix, np.ndarray]:
+    """Stiffness of both plates (each with its material) and the DOFs of every node."""
+    (E1, nu1), (E2, nu2) = joint.materials
+    upper = m.element_body == 0
+    if joint.element == "H8I":
+        same = (E1, nu1) == (E2, nu2)
+        E = E1 if same else np.where(upper, E1, E2)
+        nu = nu1 if same else np.where(upper, nu1, nu2)
+        dofs = np.arange(3 * m.points.shape[1]).reshape(-1, 3)
+        return hex8i_stiffness(m.points, m.cells, E, nu), dofs
+    mesh, elem = m.mesh, ElementVector(ElementTetP1())
+    # P1: constant strains, one quadrature point integrates the stiffness exactly
+    basis = Basis(mesh, elem, intorder=1)
+    if (E1, nu1) == (E2, nu2):
+        K = stiffness(basis, E1, nu1)
+    else:
+        K = sum(stiffness(Basis(mesh, elem, elements=np.flatnonzero(sel), intorder=1), E, nu)
+                for sel, (E, nu) in ((upper, (E1, nu1)), (~upper, (E2, nu2))))
+    return K.tocsr(), node_dofs_3d(basis)[0]
+
+
+def lap_joint_fe(joint: LapJoint) -> LapJointFE:
+    """Mesh and assemble the joint: stiffness, contact pairs, grips and load cases.
 
     Returns
     -------
-    LapJointModel
-        The reduced stiffness with the load cases of the module docstring, the tributary
-        area and nearest bolt of each contact node.
-
-    Notes
-    -----
-    The condensation is :func:`slipcycle.fe.contact3d.reduce_contact_3d` (Guyan 1965: one
-    sparse factorisation, :func:`slipcycle.condensation.schur_complement`). The service
-    cases are reduced per metre of grip motion and rescaled per newton of grip force with
-    the equilibrium of the upper plate (its only supports are the grip and the stuck
-    interface): F_grip = −Σ q (in plane) or −Σ p (out of plane).
+    LapJointFE
     """
-    from slipcycle.fe.contact3d import Case3D, condense_contact_3d, reduce_contact_3d
-
-    t0 = time.perf_counter()
     m = lap_joint_mesh(joint)
-    t_mesh = time.perf_counter() - t0
-    element = joint.element
     xyz = m.points.T
     x0, a, b, x1 = m.ranges
     tol = 1e-9 * joint.plate_length
@@ -489,27 +597,95 @@ def lap_joint_model(joint: LapJoint) -> LapJointModel:
     cases = [Case3D(f"bolt_{k}", "N", force=_washer_forces(m, xyz, joint, k),
                     description=f"washer pressures of bolt {k}, 1 N")
              for k in range(joint.bolt_count)]
-    services = (("service", 0), ("service_y", 1), ("service_z", 2))
-    for name, comp in services:
+    for name, comp in _SERVICES:
         u = np.zeros_like(xyz)
         u[grip_upper, comp] = 1.0
         cases.append(Case3D(name, "m", displacement=u))
+    K, dofs = _assemble(m, joint)
+    return LapJointFE(m, K, dofs, joint.element, pairs, fixed, tuple(cases),
+                      joint.end_gap(xyz[pairs[:, 0], 0]))
+
+
+def bonded_shortening(fe: LapJointFE, bolts: int) -> dict[str, np.ndarray]:
+    """Grip shortening of every bolt per unit of each load case, the interface bonded.
+
+    The contact pairs are tied (v = w = 0 with no gap), the grips held or moved as the
+    case prescribes; then s_k = f_kᵀ u with f_k bolt k's washer forces (1 N), the
+    approach of its two washer faces (module docstring, "Elastic bolts"). One sparse
+    factorisation.
+
+    Parameters
+    ----------
+    fe : LapJointFE
+    bolts : int
+        K, the number of bolts (the cases ``bolt_0`` … ``bolt_{K-1}``).
+
+    Returns
+    -------
+    dict
+        Case name → (K,) shortening, m per unit of the case (m/N for the bolts, m/m for
+        the grip motions).
+    """
+    K, dofs = fe.stiffness, fe.dofs
+    n = K.shape[0]
+    target = np.arange(n)
+    target[dofs[fe.pairs[:, 1]].ravel()] = dofs[fe.pairs[:, 0]].ravel()   # the ties
+    held = dofs[fe.fixed]
+    free = np.ones(n, bool)
+    free[held] = False
+    free[dofs[fe.pairs[:, 1]].ravel()] = False
+    col = np.full(n, -1)
+    col[free] = np.arange(int(free.sum()))
+    rows = np.flatnonzero(col[target] >= 0)
+    P = sp.csr_matrix((np.ones(rows.size), (rows, col[target[rows]])),
+                      shape=(n, int(free.sum())))
+    solve = splu((P.T @ K @ P).tocsc()).solve
+    washers = np.zeros((n, bolts))
+    fields = np.zeros((n, len(fe.cases)))
+    for j, case in enumerate(fe.cases):
+        f, u0 = np.zeros(n), np.zeros(n)
+        if case.force is not None:
+            np.add.at(f, dofs.ravel(), np.asarray(case.force, float).ravel())
+        if case.displacement is not None:
+            u0[held] = np.asarray(case.displacement, float)[fe.fixed]
+        fields[:, j] = P @ solve(P.T @ (f - K @ u0)) + u0
+        if j < bolts:
+            washers[:, j] = f
+    return {case.name: washers.T @ fields[:, j] for j, case in enumerate(fe.cases)}
+
+
+def lap_joint_model(joint: LapJoint) -> LapJointModel:
+    """Mesh the lap joint, reduce it to the contact nodes of its overlap (one factorisation).
+
+    Parameters
+    ----------
+    joint : LapJoint
+        Geometry (m), materials (Pa), bolts and mesh.
+
+    Returns
+    -------
+    LapJointModel
+        The reduced stiffness with the load cases of the module docstring, the tributary
+        area and nearest bolt of each contact node, and the bonded bolt shortenings.
+
+    Notes
+    -----
+    The condensation is :func:`slipcycle.fe.contact3d.condense_contact_3d` (Guyan 1965:
+    one sparse factorisation, :func:`slipcycle.condensation.schur_complement`). The
+    service cases are reduced per metre of grip motion and rescaled per newton of grip
+    force with the equilibrium of the upper plate (its only supports are the grip and the
+    stuck interface): F_grip = −Σ q (in plane) or −Σ p (out of plane).
+    """
+    t0 = time.perf_counter()
+    fe = lap_joint_fe(joint)
+    t_mesh = time.perf_counter() - t0
     t1 = time.perf_counter()
-    gap = joint.end_gap(xyz[pairs[:, 0], 0])
-    contact = dict(pairs=pairs, normals=(0.0, 0.0, -1.0), gap=gap,
-                   tangents=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), fixed=fixed, cases=cases,
-                   source=f"slipcycle.fe lap_joint_model {joint!r}")
-    if element == "H8I":
-        from slipcycle.fe.hex8i import hex8i_stiffness
-
-        def assemble():
-            return hex8i_stiffness(m.points, m.cells, joint.E, joint.nu), "H8I"
-
-        dofs = np.arange(3 * xyz.shape[0]).reshape(-1, 3)
-        red = condense_contact_3d(assemble, dofs, m.points, **contact)
-    else:
-        red = reduce_contact_3d(m.mesh, materials=[(joint.E, joint.nu)], element=element,
-                                **contact)
+    red = condense_contact_3d(lambda: (fe.stiffness, fe.element), fe.dofs, fe.mesh.points,
+                              pairs=fe.pairs, normals=(0.0, 0.0, -1.0), gap=fe.gap,
+                              tangents=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), fixed=fe.fixed,
+                              cases=fe.cases,
+                              source=f"slipcycle.fe lap_joint_model {joint!r}")
+    shortening = bonded_shortening(fe, joint.bolt_count)
     t_reduce = time.perf_counter() - t1
     N = red.n_nodes
     loads = {}
@@ -519,36 +695,42 @@ def lap_joint_model(joint: LapJoint) -> LapJointModel:
         loads[f"bolt_{k}"] = case
         grip_share[k] = 1.0 - float(np.sum(case["p"]))
     grip_stiffness = {}
-    for name, comp in services:
+    for name, comp in _SERVICES:
         case = red.loads[name]
         total = (-np.sum(case["q"][comp::2]) if comp < 2 else -np.sum(case["p"]))
         grip_stiffness[f"{name}_grip_stiffness_N_per_m"] = float(total)
         loads[name] = {"q": case["q"] / total, "p": case["p"] / total}
+        shortening[name] = shortening[name] / total
     if joint.end_relief > 0:
         loads["gap"] = red.loads["gap"]
+        # the gap enters as d_true = d − [0; g]: s_k gains p_kᵀ g (module docstring)
+        shortening["gap"] = np.array([float(loads[f"bolt_{k}"]["p"] @ fe.gap)
+                                      for k in range(joint.bolt_count)])
     reduced = ReducedStiffness(A=red.A, B=red.B, C=red.C, tangential_dims=2,
                                nodes=red.nodes, coordinates=red.coordinates,
                                normals=red.normals, tangents=red.tangents, loads=loads,
                                source=red.source)
     coords = red.coordinates
     centres = joint.centres
-    area = _node_area(m, coords)
+    area = _node_area(fe.mesh, coords)
     region = np.argmin(np.linalg.norm(coords[:, None, :2] - centres[None], axis=-1),
                        axis=1)
     spacing = float(np.sqrt(area.sum() / N))
+    (E1, nu1), (E2, nu2) = joint.materials
     description = {
         "plate_length_m": joint.plate_length, "plate_width_m": joint.plate_width,
-        "thickness_m": joint.thickness, "overlap_m": joint.overlap, "E_Pa": joint.E,
-        "nu": joint.nu, "bolt_count": joint.bolt_count,
+        "thickness_m": joint.thickness, "overlap_m": joint.overlap, "E_Pa": E1,
+        "nu": nu1, "E_lower_Pa": E2, "nu_lower": nu2, "bolt_count": joint.bolt_count,
         "bolt_diameter_m": joint.bolt_diameter, "washer_diameter_m": joint.washer_diameter,
+        "bolt_stiffness_N_per_m": joint.bolt_stiffness,
         "end_relief_m": joint.end_relief, "end_relief_depth_m": joint.end_relief_depth,
         "mesh_size_m": joint.mesh_size, "refine": joint.refine, "node_spacing_m": spacing,
-        "element": element,
-        "layers": joint.layer_count, "contact_nodes": N, "dofs": 3 * xyz.shape[0],
-        "elements": int(m.cells.shape[1]), "mesh_s": t_mesh, "reduction_s": t_reduce,
+        "element": joint.element,
+        "layers": joint.layer_count, "contact_nodes": N, "dofs": int(fe.stiffness.shape[0]),
+        "elements": int(fe.mesh.cells.shape[1]), "mesh_s": t_mesh, "reduction_s": t_reduce,
         **grip_stiffness,
     }
     return LapJointModel(reduced=reduced, node_area=area, bolt_region=region.astype(int),
-                         bolt_centres=centres,
-                         spacing=spacing,
-                         grip_share=grip_share, description=description)
+                         bolt_centres=centres, spacing=spacing, grip_share=grip_share,
+                         description=description, bolt_shortening=shortening,
+                         bolt_stiffness=joint.bolt_stiffness)

@@ -10,9 +10,16 @@ meshes of ``[lap_joint.convergence]``, and runs the study
   material [Pa], bolts, mesh size at the interface [m]), ``friction`` and
   ``accept_ill_posed`` (run even if f reaches the critical friction coefficient);
 - ``[lap_joint.loading]``: ``preload`` [N] per bolt, ``service_amplitude`` [N];
+- ``[lap_joint]`` also takes the lower plate's ``E_lower``, ``nu_lower`` [Pa, 1]
+  (dissimilar plates) and elastic bolts: ``bolt_modulus`` [Pa] (0: constant-force bolts),
+  ``bolt_shank_diameter``, ``bolt_length`` [m];
 - ``[lap_joint.protocols]``: ``names`` (standard patterns ``sequential``, ``star``,
-  ``reversed``, ``simultaneous``, or labels of ``orders``) and optional ``orders`` (per
-  protocol a list of bolt numbers, or lists of numbers tightened together);
+  ``reversed``, ``simultaneous``, labels of ``orders`` or of ``steps``) and optional
+  ``orders`` (per protocol a list of bolt numbers, or lists of numbers tightened together)
+  or ``[lap_joint.protocols.steps]`` (per protocol a list of steps, each a table with one
+  action: ``tighten``/``loosen``/``turn`` = bolt numbers with ``force`` [N, one or one per
+  bolt] or ``by`` [m], ``service``/``overload`` = load [N], ``offset`` = grip offset [m],
+  ``release`` = true; :mod:`slipcycle.joints.lap_joint_protocol`);
 - ``[lap_joint.convergence]``: ``coarsening`` (factors > 1 of the mesh size of extra,
   coarser meshes; ``[]``: the case's mesh only; with ``refine`` = k, a factor 2^j ≤ 2^k
   removes j refinements, so the meshes are nested: :func:`coarser_joint`), ``rtol``;
@@ -33,15 +40,16 @@ import numpy as np
 from slipcycle.errors import InputError
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.io.case import read_steady_tol
-from slipcycle.joints.lap_joint_study import (
+from slipcycle.joints.lap_joint_protocol import (
     STANDARD_PROTOCOLS,
+    STEP_ACTIONS,
     JointContact,
-    LapJointResult,
     Protocol,
-    StudySettings,
-    lap_joint_study,
+    Step,
     standard_protocol,
 )
+from slipcycle.joints.lap_joint_result import LapJointResult
+from slipcycle.joints.lap_joint_study import StudySettings, lap_joint_study
 
 __all__ = ["LapJointCase", "read_lap_joint_case", "joint_contact", "solve_model",
            "solve_case", "run_case", "FIELD_FORMATS"]
@@ -157,24 +165,93 @@ def _order(ps: Section, key: str, raw, bolt_count: int) -> tuple:
     return tuple(steps)
 
 
-def _read_protocols(ps: Section, bolt_count: int) -> tuple:
-    names_raw = ps.data.get("names", list(STANDARD_PROTOCOLS))
-    ps._used.add("names")
+#: the keys of a step table besides its action
+_STEP_OPTIONS = ("force", "by")
+
+
+def _read_step(ps: Section, name: str, j: int, raw) -> Step:
+    """One step of ``[lap_joint.protocols.steps]``: a table with one action key."""
+    key = ps.key(f"steps.{name}[{j}]")
+    if not isinstance(raw, dict):
+        raise CaseError(key, f"a step is a table with one action ({', '.join(STEP_ACTIONS)}"
+                             f", offset), e.g. {{tighten = [0, 1]}}; got {raw!r}")
+    actions = [a for a in (*STEP_ACTIONS, "offset") if a in raw]
+    if len(actions) != 1:
+        raise CaseError(key, f"needs exactly one action of {', '.join(STEP_ACTIONS)}, "
+                             f"offset; got {sorted(raw) or 'none'}")
+    action = actions[0]
+    extra = sorted(set(raw) - {action, *_STEP_OPTIONS})
+    if extra:
+        raise CaseError(f"{key}.{extra[0]}", "unknown key")
+    value = raw[action]
+    kw = {k: raw[k] for k in _STEP_OPTIONS if k in raw}
+    allowed = {"tighten": ("force",), "loosen": ("force",), "turn": ("by",)}.get(action, ())
+    for k in kw:
+        if k not in allowed:
+            raise CaseError(f"{key}.{k}", f"a {action} step takes no {k}")
+    for k, v in kw.items():
+        if isinstance(v, bool) or not isinstance(v, int | float | list):
+            raise CaseError(f"{key}.{k}", f"must be a number (or a list), got {v!r}")
+    if action in ("tighten", "loosen", "turn"):
+        bolts = value if isinstance(value, list) else [value]
+        if not bolts or any(isinstance(b, bool) or not isinstance(b, int) for b in bolts):
+            raise CaseError(f"{key}.{action}", f"must be bolt numbers, got {value!r}")
+        kw["bolts"] = tuple(bolts)
+    elif action == "release":
+        if value is not True:
+            raise CaseError(f"{key}.release", f"must be true, got {value!r}")
+    elif isinstance(value, bool) or not isinstance(value, int | float):
+        raise CaseError(f"{key}.{action}", f"must be a number, got {value!r}")
+    elif action == "offset":
+        action, kw["offset"] = "service", float(value)
+    else:
+        kw["force"] = float(value)
+    try:
+        return Step(action, **kw)
+    except InputError as exc:
+        sub = exc.key if exc.key in raw else actions[0]
+        raise CaseError(f"{key}.{sub}", exc.problem) from None
+
+
+def _read_steps(ps: Section, names: list) -> dict:
+    """``[lap_joint.protocols.steps]``: protocol name → tuple of Step."""
+    steps_sec = ps.table("steps", {})
+    out = {}
+    for name in steps_sec.data:
+        if name not in names:
+            raise steps_sec.error(name, f"protocol {name!r} is not in names {names}")
+        raw = steps_sec.raw(name)
+        if not isinstance(raw, list) or not raw:
+            raise steps_sec.error(name, "must be a non-empty list of steps, e.g. "
+                                        "[{tighten = [0]}, {tighten = [1]}]")
+        out[name] = tuple(_read_step(ps, name, j, item) for j, item in enumerate(raw))
+    steps_sec.finish()
+    return out
+
+
+def _read_protocols(ps: Section, joint) -> tuple:
+    bolt_count = joint.bolt_count
+    names_raw = ps.raw("names", list(STANDARD_PROTOCOLS))
     if (not isinstance(names_raw, list) or not names_raw
             or not all(isinstance(n, str) and n for n in names_raw)):
         raise ps.error("names", f"must be a non-empty list of protocol names, got "
                                 f"{names_raw!r}")
     if len(set(names_raw)) != len(names_raw):
         raise ps.error("names", f"protocol names must be distinct, got {names_raw}")
-    orders = ps.data.get("orders")
-    ps._used.add("orders")
+    orders = ps.raw("orders", None)
+    steps = _read_steps(ps, names_raw)
+    if orders is not None and steps:
+        raise ps.error("steps", "give either orders or steps, not both")
     protocols = []
     if orders is None:
         for name in names_raw:
+            if name in steps:
+                protocols.append(Protocol(name, steps[name]))
+                continue
             if name not in STANDARD_PROTOCOLS:
                 raise ps.error("names", f"{name!r} is no standard protocol (known: "
                                         f"{', '.join(STANDARD_PROTOCOLS)}); give its order "
-                                        "in orders")
+                                        "in orders or its steps in steps")
             protocols.append(standard_protocol(name, bolt_count))
     else:
         if not isinstance(orders, list) or len(orders) != len(names_raw):
@@ -185,8 +262,13 @@ def _read_protocols(ps: Section, bolt_count: int) -> tuple:
     for p in protocols:
         try:
             p.check(bolt_count)
+            if not joint.bolt_modulus and any(s.action == "turn" for s in p.step_list):
+                raise InputError("protocols", f"{p.name}: a turn needs elastic bolts "
+                                              "(lap_joint.bolt_modulus > 0)")
         except InputError as exc:
-            raise ps.error("orders" if orders is not None else "names", exc.problem) from None
+            key = "steps" if p.name in steps else ("orders" if orders is not None
+                                                  else "names")
+            raise ps.error(key, exc.problem) from None
     return tuple(protocols)
 
 
@@ -217,12 +299,12 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
                        sec.prefix, sec.base_dir)
     joint = _read_joint(geometry)
     geometry.finish()
-    sec._used.update(geometry._used)
+    sec.accept(geometry.data)
 
     preload = ld.float("preload", gt=0.0)
     service = ld.float("service_amplitude", ge=0.0)
     ld.finish()
-    protocols = _read_protocols(ps, joint.bolt_count)
+    protocols = _read_protocols(ps, joint)
     ps.finish()
     coarsening = cv.array("coarsening", [2.0], shape=(None,), gt=1.0)
     if len(set(coarsening.tolist())) != coarsening.size:
@@ -239,8 +321,7 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
            "replay": rn.bool("replay", False)}
     difference_tol = rn.float("difference_tol", 1e-3, gt=0.0, lt=1.0)
     out = case.section("output", required=False)
-    fields = out.data.get("fields", ["xdmf"])
-    out._used.add("fields")
+    fields = out.raw("fields", ["xdmf"])
     if isinstance(fields, str):
         fields = [fields]
     if not isinstance(fields, list) or any(f not in FIELD_FORMATS for f in fields):
@@ -274,8 +355,13 @@ def joint_contact(joint) -> JointContact:
         regions and the node spacing (the joint's interface mesh size) [m].
     """
     model = _lap_joint().lap_joint_model(joint)
+    # the bolt centres [m] with the geometry: the figures outline holes and washers
+    description = dict(model.description,
+                       bolt_centres_m=np.asarray(model.bolt_centres, float).tolist())
     return JointContact(model.reduced, model.node_area, model.bolt_region,
-                        float(model.spacing), dict(model.description))
+                        float(model.spacing), description,
+                        bolt_stiffness=float(model.bolt_stiffness),
+                        bolt_shortening=dict(model.bolt_shortening))
 
 
 def solve_model(lc: LapJointCase, *, progress=None) -> LapJointResult:

@@ -133,6 +133,7 @@ def report_markdown(result) -> str:
                      f"{stuck[j] / total_area:.3f} | {len(sol.slipping_nodes)} | "
                      f"{r.cycles_run} |")
     lines.append("")
+    lines += _bolt_table(result)
     conv = result.convergence
     lines += ["## Mesh convergence", ""]
     if all(x is None for x in conv):
@@ -166,3 +167,23 @@ def report_markdown(result) -> str:
         lines += ["Contact fields of the steady cycle of each protocol (ParaView): "
                   "`fields/<protocol>/interface.*` (listed in `fields/README.txt`).", ""]
     return "\n".join(lines)
+
+
+def _bolt_table(result) -> list[str]:
+    """The bolt forces of every protocol: after the assembly, least and largest over the
+    steady cycle (elastic bolts change them; constant-force bolts keep their targets)."""
+    F = result.bolt_force
+    if np.isnan(F).all():
+        return []
+    lo, hi = result.bolt_force_range
+    kb = result.contact.bolt_stiffness
+    kind = (f"elastic bolts, k_b = {kb:.4g} N/m" if kb > 0 else "constant-force bolts")
+    lines = ["## Bolt forces", "", f"{kind.capitalize()}; per bolt after the assembly, and "
+             "its range over the steady cycle [N].", "",
+             "| protocol | after assembly | least in the cycle | largest in the cycle |",
+             "|---|---|---|---|"]
+    for j, p in enumerate(result.protocols):
+        lines.append(f"| {p.name} | {', '.join(f'{x:.6g}' for x in F[j])} | "
+                     f"{', '.join(f'{x:.6g}' for x in lo[j])} | "
+                     f"{', '.join(f'{x:.6g}' for x in hi[j])} |")
+    return [*lines, ""]
