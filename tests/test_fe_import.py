@@ -596,3 +596,25 @@ def test_out_must_be_a_directory(tmp_path, run_cli):
     code, _, err = run_cli("reduce", path, "--out", tmp_path / "reduced.npz")
     assert code == 2 and err.count("\n") == 1 and "--out" in err and "directory" in err
     assert not (tmp_path / "reduced.npz").exists()
+
+
+def test_deck_of_shell_elements_is_refused_naming_the_line(tmp_path, run_cli):
+    def edit(t, tmp):
+        deck = tmp / "block.inp"
+        deck.write_text(deck.read_text().replace("TYPE=C3D8,", "TYPE=S4,"))
+        return t
+
+    err = _mistake(tmp_path, run_cli, edit)
+    assert "fe_import.body[0].mesh" in err and "block.inp, line" in err and "S4" in err
+
+
+def test_truncated_deck_is_refused(tmp_path, run_cli):
+    def edit(t, tmp):
+        deck = tmp / "block.inp"
+        text = deck.read_text()
+        cut = text.index("*NSET, NSET=BOTTOM")
+        deck.write_text(text[:cut - 4])          # inside the last element's node list
+        return t
+
+    err = _mistake(tmp_path, run_cli, edit)
+    assert "fe_import.body[0].mesh" in err and "block.inp" in err
