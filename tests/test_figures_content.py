@@ -384,8 +384,29 @@ def test_rods_time_history_draws_a_varying_normal_force():
 # -- sphere with out-of-phase loads: the steady loop is closed --------------------------------
 
 
-def test_out_of_phase_sphere_hysteresis_loop_is_closed_and_encloses_the_dissipation():
-    result = slipcycle.run(example_text("halfspace_sphere_out_of_phase"))
+@pytest.fixture(scope="module")
+def out_of_phase():
+    return slipcycle.run(example_text("halfspace_sphere_out_of_phase"))
+
+
+def test_out_of_phase_sphere_tractions_name_each_distinct_pressure_once(out_of_phase):
+    """P = P0 + P1 cos θ is equal at θ = π/2 and 3π/2: one dashed curve names both."""
+    from slipcycle.plot.halfspace import tractions
+
+    ds = out_of_phase.to_dataset()
+    ax = tractions(ds).axes[0]
+    texts = _legend_texts(ax)
+    assert sorted(texts) == sorted(_labelled_lines(ax))
+    pressures = [t for t in texts if t.startswith("p, ")]
+    assert pressures == ["p, θ = 0.00 rad", "p, θ = 1.57, 4.71 rad", "p, θ = 3.14 rad"]
+    dashed = [ln for ln in ax.get_lines() if ln.get_label().startswith("p, ")]
+    for ln, k in zip(dashed, (0, 1, 2), strict=True):
+        np.testing.assert_array_equal(ln.get_ydata(), ds.pressure.values[k] / 1e6)
+
+
+def test_out_of_phase_sphere_hysteresis_loop_is_closed_and_encloses_the_dissipation(
+        out_of_phase):
+    result = out_of_phase
     ds = result.to_dataset()
     outputs = result.to_outputs()
     for name in ("hysteresis", "load_path"):

@@ -140,15 +140,21 @@ def tractions(ds: xr.Dataset) -> Figure:
     ax = fig.add_subplot()
     r = ds.radius.values * 1e3
     p = ds.pressure.values / 1e6
-    one_p = bool(np.allclose(p, p[:1], rtol=1e-12, atol=0.0))
-    for i, th in enumerate(ds.snapshot_theta.values):
-        color = f"C{i}"
-        ax.plot(r, ds.shear_traction.values[i] / 1e6, color=color, lw=1.6,
+    thetas = ds.snapshot_theta.values
+    for i, th in enumerate(thetas):
+        ax.plot(r, ds.shear_traction.values[i] / 1e6, color=f"C{i}", lw=1.6,
                 label=f"q, θ = {th:.2f} rad")
-        if not one_p:
-            ax.plot(r, p[i], color=color, lw=0.8, ls="--", label=f"p, θ = {th:.2f} rad")
-    if one_p:
-        ax.plot(r, p[0], color="0.3", lw=0.8, ls="--", label="p (the same at every θ)")
+    # one dashed curve per distinct pressure (equal P, equal p), named by its instants
+    drawn = np.zeros(len(thetas), bool)
+    for i in range(len(thetas)):
+        if drawn[i]:
+            continue
+        same = ~drawn & np.all(np.isclose(p, p[i], rtol=1e-12, atol=0.0), axis=1)
+        drawn |= same
+        when = ("the same at every θ" if same.all() else
+                "θ = " + ", ".join(f"{th:.2f}" for th in thetas[same]) + " rad")
+        ax.plot(r, p[i], color="0.3" if same.all() else f"C{i}", lw=0.8, ls="--",
+                label=f"p, {when}")
     if "permanent_stick_size" in ds:
         c = float(ds.permanent_stick_size) * 1e3
         ax.axvline(c, color="0.4", ls=":", lw=1,
