@@ -252,11 +252,19 @@ class Timer:
 # -- options of the sweep-based commands (sweep, basins, shakedown) -----------------------
 
 def count_option(text: str) -> int:
-    """argparse ``type`` of a count option (integer, also ``1e6``); the discrete models'
-    reader, loaded when such an option is given."""
-    from slipcycle.discrete.sizes import count_option as parse
-
-    return parse(text)
+    """argparse ``type`` of a count option: an integer, also written as an integral float
+    (``1e6``), so that a huge value is judged by its memory rather than its spelling."""
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        val = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+    if not val.is_integer():
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}")
+    return int(val)
 
 
 class _Workers(argparse.Action):

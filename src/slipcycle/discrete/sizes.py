@@ -12,7 +12,7 @@ from __future__ import annotations
 from slipcycle.io.sizes import MEMORY_LIMIT, check_memory, format_bytes
 
 __all__ = ["MEMORY_LIMIT", "check_memory", "format_bytes", "run_bytes", "system_bytes",
-           "cells_bytes", "count_option"]
+           "cells_bytes"]
 
 #: bytes per node and load sample of a recorded run: x, r (2N float64 each) in the result
 #: and again in the Dataset, friction limit, node modes (int8, twice)
@@ -44,21 +44,3 @@ def cells_bytes(cells: float, n_nodes: int) -> float:
     """Stored results of ``cells`` runs (dissipation per node and initial slip: 2N floats
     each, plus the fixed cost of a cell) [bytes]."""
     return float(cells) * (_CELL_BYTES + 16.0 * n_nodes)
-
-
-def count_option(text: str) -> int:
-    """argparse ``type`` of a count option: an integer, also written as an integral float
-    (``1e6``), so that a huge value is judged by its memory rather than its spelling."""
-    import argparse
-
-    try:
-        return int(text)
-    except ValueError:
-        pass
-    try:
-        val = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
-    if not val.is_integer():
-        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}")
-    return int(val)
