@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from test_lap_joint_study import synthetic_joint as block_joint
 
 from slipcycle.errors import InputError
 from slipcycle.fe.contact3d import Case3D, condense_contact_3d
 from slipcycle.fe.lap_joint import LapJoint, lap_joint_fe, lap_joint_model
-from slipcycle.fe.solid3d import Block3D, block_on_rigid_3d
 from slipcycle.io import CaseError, parse_case_text
 from slipcycle.joints.lap_joint_case import read_lap_joint_case
 from slipcycle.joints.lap_joint_protocol import (
@@ -134,34 +134,14 @@ def test_plate_materials_are_checked():
 
 def synthetic_joint(elements: int = 4, radial: float = 0.6, phi01: float = 4e-11
                     ) -> JointContact:
-    """A P1 block on a flat with three bolt cases along x (Gaussian pressure bumps of
-    1 N pushing the interface outward with ``radial`` × p) and a lap-shear service case
-    (tests/test_lap_joint_study.py); the bolts' bonded compliance Φ is given: bolts 0 and
-    1 coupled by ``phi01``, bolt 2 independent."""
-    L, W = 0.06, 0.02
-    red = block_on_rigid_3d(Block3D(L, W, 0.02, 210e9, 0.3, L, W, elements=elements,
-                                    element="P1"))
-    xyz = red.coordinates
-    n = xyz.shape[0]
-    h = L / elements
-    half = np.where(np.isclose(np.abs(xyz[:, 0]), L / 2), 0.5, 1.0) * np.where(
-        np.isclose(np.abs(xyz[:, 1]), W / 2), 0.5, 1.0)
-    centres = np.array([-0.02, 0.0, 0.02])
-    loads = {}
-    for k, cx in enumerate(centres):
-        g = np.exp(-((xyz[:, 0] - cx) ** 2 + xyz[:, 1] ** 2) / 0.008 ** 2)
-        p = g / g.sum()
-        q = radial * np.column_stack([xyz[:, 0] - cx, xyz[:, 1]]) / 0.008 * p[:, None]
-        loads[f"bolt_{k}"] = {"p": p, "q": q.ravel()}
-    q = np.zeros((n, 2))
-    q[:, 0] = 1.0 / n
-    loads["service"] = {"p": 0.3 * xyz[:, 0] / L / n, "q": q.ravel()}
-    region = np.argmin(np.abs(xyz[:, 0, None] - centres[None]), axis=1)
+    """The synthetic joint of tests/test_lap_joint_study.py (a P1 block on a flat, three
+    Gaussian bolt bumps pushing the interface outward with ``radial`` × p, a lap-shear
+    service case) with a given bonded bolt compliance Φ: bolts 0 and 1 coupled by
+    ``phi01``, bolt 2 independent."""
     Phi = np.array([[3e-10, phi01, 0.0], [phi01, 3e-10, 0.0], [0.0, 0.0, 3e-10]])
     shortening = {f"bolt_{k}": Phi[k] for k in range(3)}
     shortening["service"] = np.array([1e-11, 0.0, -1e-11])
-    return JointContact(replace(red, loads=loads), h * h * half, region, h,
-                        bolt_shortening=shortening)
+    return replace(block_joint(elements, radial), bolt_shortening=shortening)
 
 
 FAST = {"cycles": 40, "steps_per_cycle": 16, "tol": 1e-7, "step_tol": 1e-6}
@@ -358,3 +338,65 @@ def test_cli_runs_elastic_bolts_and_a_fit_up_protocol_and_writes_the_bolt_forces
     with xr.open_dataset(tmp_path / "out" / "result.nc") as ds:
         np.testing.assert_allclose(ds["bolt_force"].values, s["protocol_bolt_force"])
     assert "| fit_up |" in (tmp_path / "out" / "report.md").read_text()
+
+
+# -- the steady-state class follows the service cycle ----------------------------------------
+
+def _two_nodes(gap_force: float) -> JointContact:
+    """Two uncoupled nodes (k = c = 1e8 N/m): node 0 pressed by the bolt (1 N per N) and
+    pulled along t1 by the service load; node 1 pulled open by ``gap_force`` per 1 kN of
+    bolt load (its separation stands for the initial gap of the rounded plate ends)."""
+    from slipcycle.io.matrices import ReducedStiffness
+
+    loads = {"bolt_0": {"q": np.zeros(4), "p": np.array([1.0, -gap_force / 1e3])},
+             "service": {"q": np.array([1.0, 0.0, 0.0, 0.0]), "p": np.zeros(2)}}
+    red = ReducedStiffness(A=1e8 * np.eye(4), B=np.zeros((2, 4)), C=1e8 * np.eye(2),
+                           tangential_dims=2, loads=loads,
+                           coordinates=np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0]]))
+    return JointContact(red, np.full(2, 1e-6), np.zeros(2, int), 1e-3)
+
+
+def _classes(contact, F):
+    out = []
+    for step_tol in (1e-4, 1e-6):
+        run = {"cycles": 10, "steps_per_cycle": 16, "tol": 1e-6, "step_tol": step_tol}
+        settings = StudySettings(preload=1e3, service_amplitude=F, friction=0.3, run=run)
+        res = lap_joint_study(contact, [standard_protocol("simultaneous", 1)], settings,
+                              fields=())
+        out.append(res.runs[0])
+    return out
+
+
+def test_slip_under_a_small_service_load_is_slip_whatever_the_gap_and_step_tolerance():
+    """Node 0 (f P = 300 N) under F = 303 N slips 4 (F − f P)/k = 1.2e-7 m per cycle and
+    dissipates 1 % of its design value (F = 2 f P): cyclic slip at step tolerances 1e-4
+    and 1e-6. Node 1 stands 1 cm open: measured against the whole state (the old rule,
+    1e-4 × max |x| = 1e-6 m) that slip was 'shakedown'."""
+    for r in _classes(_two_nodes(1e6), 303.0):
+        sol = r.solution
+        assert sol.slip_length[0] == pytest.approx(1.2e-7, rel=1e-6)
+        assert sol.dissipation_per_cycle == pytest.approx(300 * 1.2e-7, rel=0.02)
+        assert sol.steady_state == "cyclic_slip" and r.steady_state == "cyclic_slip"
+        assert sol.slip_length[0] < 1e-4 * np.abs(sol.cycle_start_states[-1]).max()
+
+
+def test_a_run_dissipating_1e_10_of_the_design_value_has_one_class_for_both_step_tols():
+    """F = f P (1 + 1e-10): node 0 slips 1e-10 of what it slips at the design load, and
+    dissipates that fraction of D_design = 4 (f P)²/k; far below 100 tol of the service
+    displacement: shakedown to the tolerance, at step tolerances 1e-4 and 1e-6 alike."""
+    D_design = 4 * 300.0 ** 2 / 1e8
+    runs = _classes(_two_nodes(0.0), 300.0 * (1 + 1e-10))
+    for r in runs:
+        sol = r.solution
+        assert 1e-11 < sol.dissipation_per_cycle / D_design < 1e-9
+        assert 0 < sol.slip_length[0] < sol.slip_tolerance
+    assert {r.solution.steady_state for r in runs} == {"shakedown"}
+
+
+def test_service_displacement_scale_is_the_variation_of_the_load_over_stiffness():
+    from slipcycle.loading.service import cycle_slip_tolerance, service_displacement_scale
+
+    samples = np.array([[5e3, 1.0], [5e3, 11.0], [5e3, -9.0], [5e3, 1.0]])
+    assert service_displacement_scale(samples, 1e9) == pytest.approx(10.0 / 1e9)
+    assert cycle_slip_tolerance(1e-6, 1e-8, 5e-6) == pytest.approx(1e-4 * 1e-8)
+    assert cycle_slip_tolerance(1e-6, 0.0, 5e-6) == pytest.approx(5e-18)

@@ -1,0 +1,68 @@
+"""The scale of the service cycle: what counts as slip in a steady cycle.
+
+A steady cycle is ``shakedown`` when no node slips in it (Barber 2012, §3), and a node
+"slips" when its slip length over the cycle exceeds a tolerance that separates slip from
+the round-off and step-control noise of the evolution. That tolerance must be relative to
+what the *periodic* load can do: the elastic displacement of its variation over the cycle,
+r^w(θ) − r^w(0). Measured against the whole load instead (a bolt preload thousands of
+times the service load, or the slip and initial gap left by the assembly), a real microslip
+under a small service load falls below it and the run is called ``shakedown`` while it
+dissipates energy every cycle.
+
+References
+----------
+Barber, J. R. (2012). Frictional systems subjected to oscillating loads. Ann. Solid Struct.
+Mech. 2, 45–55.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["service_displacement_scale", "cycle_slip_tolerance"]
+
+
+def service_displacement_scale(samples: np.ndarray, stiffness_scale: float) -> float:
+    """Elastic displacement scale of the service cycle [m].
+
+    Parameters
+    ----------
+    samples : (S, M) array
+        Load samples r^w(θ_s) of one cycle [N] (the first at θ = 0).
+    stiffness_scale : float
+        max diag K of the system [N/m].
+
+    Returns
+    -------
+    float
+        max_s |r^w(θ_s) − r^w(θ_0)|_∞ / max diag K: the displacement the variation of the
+        load over the cycle gives a node held only by its own stiffness; 0 for a constant
+        load.
+    """
+    samples = np.asarray(samples, float)
+    variation = float(np.max(np.abs(samples - samples[0]), initial=0.0))
+    return variation / float(stiffness_scale)
+
+
+def cycle_slip_tolerance(tol: float, service_scale: float, disp_scale: float) -> float:
+    """Slip length [m] at or below which a node counts as stuck over a steady cycle.
+
+    max(100 tol, 1e-9) × u_s, u_s the service cycle's displacement scale
+    (:func:`service_displacement_scale`), so that the threshold follows the service
+    load, not the preload; at least 1e-12 × the displacement scale of the whole load
+    (round-off of a cycle whose load hardly varies).
+
+    Parameters
+    ----------
+    tol : float
+        Steady-state tolerance [1].
+    service_scale : float
+        u_s [m].
+    disp_scale : float
+        Displacement scale of the whole load [m].
+
+    Returns
+    -------
+    float
+    """
+    return max(max(100 * tol, 1e-9) * service_scale, 1e-12 * disp_scale)
