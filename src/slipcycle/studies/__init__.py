@@ -21,3 +21,32 @@ this package, nor the sweep engine, nor the figures (contract ``models-below-stu
 - :mod:`~slipcycle.studies.case_sweep`  sweeps over the keys of any case
   (``slipcycle sweep``)
 """
+
+import importlib
+
+# each study loads its model, xarray and the sweep engine: loaded on first use
+_LAZY = {
+    "basins_study": "basins", "BasinsResult": "basins",
+    "basins3d_study": "basins3d", "Basins3DResult": "basins3d",
+    "shakedown_study": "shakedown", "ShakedownResult": "shakedown",
+    "parse_map_case": "w_hat_map", "w_hat_map_study": "w_hat_map", "WHatMapResult": "w_hat_map",
+    "parse_roughness_case": "roughness", "roughness_study": "roughness",
+    "RoughnessResult": "roughness",
+    "parse_limits": "limits", "limits_study": "limits", "LimitsResult": "limits",
+    "run_case_sweep": "case_sweep",
+    "BasinsStudyResult": "common", "read_protocols": "common",
+}
+
+__all__ = list(_LAZY)
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f"slipcycle.studies.{_LAZY[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'slipcycle.studies' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
