@@ -16,6 +16,7 @@ import shutil
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from slipcycle.io.matrices import StiffnessError, read_reduced_stiffness
@@ -200,3 +201,25 @@ def test_reduce_of_the_file_exits_2_in_one_line_writing_nothing(case, run_cli, t
     line = _one_line(code, stdout, err, *words)
     assert path.name in line
     assert not out.exists()
+
+
+def test_a_condensation_that_is_not_the_schur_complement_is_caught(monkeypatch):
+    """The reduction of a full K is checked against the equilibrium of K itself: a
+    condensation engine that returned the uncondensed block K_bb (what CalculiX's
+    substructure export holds) is refused in one line."""
+    from slipcycle.io.fe_formats import dofmap
+
+    def uncondensed(K, ni, F=None, block=128):
+        Kd = K.toarray()
+        R = np.zeros((K.shape[0] - ni, 0 if F is None else F.shape[1]))
+        return Kd[ni:, ni:], R
+
+    kw = _kwargs("example.sti")
+    ok = read_reduced_stiffness(DATA / "example.sti", tangential_dims=1, **kw)
+    monkeypatch.setattr(dofmap, "schur_complement", uncondensed)
+    with pytest.raises(StiffnessError) as err:
+        read_reduced_stiffness(DATA / "example.sti", tangential_dims=1, **kw)
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith("example.sti")
+    assert "not its Schur complement" in msg
+    assert ok.C.shape == (2, 2)

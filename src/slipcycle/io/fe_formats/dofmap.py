@@ -316,11 +316,40 @@ def _condense(K, c: np.ndarray, r: np.ndarray, loads: dict, where: str):
         else None
     try:
         S, R = schur_complement(Kq, r.size, F)
+        _check_schur(Kq, r.size, S, where)
     except SingularModelError:
         raise file_error(where, "the retained (condensed) block of K is singular or not "
                          "positive definite: the body is not supported with the contact "
                          "nodes held") from None
     return S, {n: R[:, k] for k, n in enumerate(names)}
+
+
+#: largest accepted residual of the condensation's equilibrium, relative to ‖K_bb z‖ + ‖S z‖
+SCHUR_RTOL = 1e-8
+
+
+def _check_schur(Kq, ni: int, S: np.ndarray, where: str) -> None:
+    """Check that S is the Schur complement K_bb − K_bi K_ii⁻¹ K_ib of ``Kq`` (retained
+    dofs first), independently of how it was computed: for two random contact motions z,
+    the retained dofs x = −K_ii⁻¹ K_ib z (a separate sparse LU) must leave the contact
+    reactions K_bb z + K_bi x = S z. A failed factorisation path (a lost pivot, an
+    ill-conditioned retained block) gives a plausible symmetric S that fails this.
+    """
+    from slipcycle.condensation import factorize
+
+    if ni == 0:
+        return
+    nb = Kq.shape[0] - ni
+    Z = np.random.default_rng(0).standard_normal((nb, 2))
+    K_ib = Kq[:ni, ni:]
+    X = -factorize(Kq[:ni, :ni]).solve(np.asfortranarray(np.asarray(K_ib @ Z)))
+    direct = np.asarray(Kq[ni:, ni:] @ Z)
+    got = direct + np.asarray(Kq[ni:, :ni] @ X)
+    res = np.linalg.norm(got - S @ Z) / (np.linalg.norm(direct) + np.linalg.norm(S @ Z))
+    if not res <= SCHUR_RTOL:
+        raise file_error(where, f"the condensation of K is not its Schur complement "
+                         f"(equilibrium residual {res:.1e} > {SCHUR_RTOL:g}): K is too "
+                         "ill-conditioned for its retained rows to be condensed out")
 
 
 def _constrained(K, Lc: np.ndarray, loads: dict, where: str):
