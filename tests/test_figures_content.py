@@ -425,3 +425,19 @@ def test_out_of_phase_sphere_hysteresis_loop_is_closed_and_encloses_the_dissipat
                                            if ln.get_label() == "last cycle"][0].get_data())
     area = np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(x)) * 1e-6     # V drawn in µm
     assert area == pytest.approx(float(ds.dissipation.values[-1]), rel=1e-9)
+
+
+@pytest.mark.parametrize("run", ["proportional", "out_of_phase", "two_node", "rods",
+                                 "lap_joint"])
+def test_every_figure_of_these_runs_lies_inside_its_canvas(request, run):
+    """Legends placed outside the axes (tractions, the lap joint's maps and bars) are
+    inside the figure, not cut off at its edge."""
+    result = request.getfixturevalue(run)
+    outputs = result[1] if isinstance(result, tuple) else result.to_outputs()
+    for name, make in outputs.figures.items():
+        fig = make()
+        renderer = _draw(fig)
+        box = fig.get_tightbbox(renderer)          # inches, the drawn artists
+        width, height = fig.get_size_inches()
+        assert box.x0 >= -0.01 and box.y0 >= -0.01, name
+        assert box.x1 <= width + 0.01 and box.y1 <= height + 0.01, name
