@@ -16,7 +16,7 @@ Shared fields (the same names, meanings and units for every model):
 - ``message``: one sentence saying what happened.
 
 Methods: :meth:`RunResult.summary` (the ``summary.json`` dictionary, with ``units``),
-:meth:`RunResult.to_dataset` (the one place a result's :class:`xarray.Dataset` is built),
+:meth:`RunResult.to_dataset` (the result's :class:`xarray.Dataset`, completed to CF),
 :meth:`RunResult.figures` (name -> function drawing a matplotlib Figure),
 :meth:`RunResult.to_outputs` (all of it as :class:`~slipcycle.io.RunOutputs`), and a
 one-line ``repr`` and a small HTML table for notebooks.
@@ -51,7 +51,6 @@ one-line ``repr`` of its headline numbers and a small HTML table.
 
 from __future__ import annotations
 
-import functools
 import html
 import math
 from dataclasses import dataclass
@@ -187,29 +186,14 @@ def _html_table(caption: str, rows: list[tuple[str, Any, str]]) -> str:
 class _Contract:
     """The output methods shared by run results and analysis results.
 
-    A subclass implements :meth:`summary`, :meth:`to_dataset`, :meth:`figures` and
-    :attr:`flags`; :meth:`to_outputs` packs them as ``RunOutputs``. The Dataset a subclass
-    builds is completed to the CF conventions here (coordinate variables for every
-    dimension, ``long_name`` and ``units`` from the summary's units, flag attributes:
+    A subclass implements :meth:`summary`, :meth:`_build_dataset` (the one place its
+    Dataset is built), :meth:`figures` and :attr:`flags`. :meth:`to_dataset` completes the
+    built Dataset to the CF conventions (coordinate variables for every dimension,
+    ``long_name`` and ``units`` from the summary's units, flag attributes:
     :func:`slipcycle.io.metadata.cf_complete`), so ``to_dataset()`` in Python is what
-    ``result.nc`` holds.
+    ``result.nc`` holds; :meth:`to_outputs` packs them as ``RunOutputs`` with one call of
+    :meth:`summary` and one CF completion.
     """
-
-    def __init_subclass__(cls, **kwargs):
-        super().__init_subclass__(**kwargs)
-        build = cls.__dict__.get("to_dataset")
-        if build is None or getattr(build, "_cf_completed", False):
-            return
-
-        @functools.wraps(build)
-        def to_dataset(self, *args, **kw):
-            from slipcycle.io.metadata import cf_complete
-
-            ds = build(self, *args, **kw)
-            return cf_complete(ds, self.summary().get("units"), dict(self.flags))
-
-        to_dataset._cf_completed = True
-        cls.to_dataset = to_dataset
 
     @property
     def flags(self) -> dict[str, tuple[str, ...]]:
@@ -220,9 +204,24 @@ class _Contract:
         """The ``summary.json`` dictionary, with its ``units`` map."""
         raise NotImplementedError
 
-    def to_dataset(self) -> xr.Dataset:
-        """The result as an :class:`xarray.Dataset` (every variable has units)."""
+    def _build_dataset(self) -> xr.Dataset:
+        """The result's Dataset as the subclass builds it (before the CF completion)."""
         raise NotImplementedError
+
+    def to_dataset(self, summary: dict | None = None) -> xr.Dataset:
+        """The result as an :class:`xarray.Dataset` (every variable has units), completed
+        to the CF conventions; a new Dataset on each call.
+
+        Parameters
+        ----------
+        summary : dict, optional
+            The result of :meth:`summary`, if already built (its ``units`` complete the
+            Dataset; else built here).
+        """
+        from slipcycle.io.metadata import cf_complete
+
+        units = (self.summary() if summary is None else summary).get("units")
+        return cf_complete(self._build_dataset(), units, dict(self.flags))
 
     def figures(self, dataset: xr.Dataset | None = None) -> dict[str, Any]:
         """Figure name -> function returning a matplotlib Figure (drawn when called)."""
@@ -237,8 +236,9 @@ class _Contract:
         """
         from slipcycle.io.results import RunOutputs
 
-        ds = self.to_dataset()
-        return RunOutputs(summary=self.summary(), dataset=ds, figures=self.figures(ds),
+        summary = self.summary()
+        ds = self.to_dataset(summary)
+        return RunOutputs(summary=summary, dataset=ds, figures=self.figures(ds),
                           flags=dict(self.flags))
 
 
@@ -249,7 +249,7 @@ class RunResult(_Contract):
     Subclasses (one per model: :class:`slipcycle.halfspace.outputs.HalfspaceResult`,
     :class:`slipcycle.discrete.case.DiscreteResult`, :class:`slipcycle.rods.case.RodsResult`)
     add the solver's own results as fields and implement :meth:`summary`,
-    :meth:`to_dataset` and :meth:`figures`, and set :attr:`flags`.
+    :meth:`_build_dataset` and :meth:`figures`, and set :attr:`flags`.
 
     Attributes
     ----------
@@ -270,6 +270,8 @@ class RunResult(_Contract):
         One sentence saying what happened.
     dissipation_unit : str
         ``"J"``, or ``"J/m"`` for plane (per unit length) contacts.
+    wall_time_s : float or None
+        Seconds the solution took (None for a result built without timing it).
     """
 
     #: the ``model = "..."`` name of the result's model
@@ -283,6 +285,7 @@ class RunResult(_Contract):
     converged: bool
     message: str
     dissipation_unit: str = "J"
+    wall_time_s: float | None = None
 
     # -- what each model provides --------------------------------------------------------
     @property
@@ -302,10 +305,11 @@ class RunResult(_Contract):
         """
         raise NotImplementedError
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """The full histories as an :class:`xarray.Dataset` (every variable has units).
 
-        The only place the Dataset of this result is built; a new Dataset on each call.
+        The only place the Dataset of this result is built (:meth:`to_dataset` completes
+        it to the CF conventions).
         """
         raise NotImplementedError
 
@@ -320,6 +324,24 @@ class RunResult(_Contract):
         return {}
 
     # -- shared ----------------------------------------------------------------------------
+    def shared_summary(self) -> dict:
+        """The summary entries every model's summary holds under the same names (the
+        shared fields), with their ``units``.
+
+        Returns
+        -------
+        dict
+            ``steady_state_class``, ``dissipation_per_cycle`` [``dissipation_unit``],
+            ``cycles_run``, ``residual`` [1], ``converged``, ``wall_time_s`` [s], and
+            ``units`` for them.
+        """
+        return {"steady_state_class": self.steady_state.value,
+                "dissipation_per_cycle": self.dissipation_per_cycle,
+                "cycles_run": self.cycles_run, "residual": self.residual,
+                "converged": self.converged, "wall_time_s": self.wall_time_s,
+                "units": {"dissipation_per_cycle": self.dissipation_unit, "cycles_run": "1",
+                          "residual": "1", "converged": "1", "wall_time_s": "s"}}
+
     def _shared(self) -> list[tuple[str, Any, str]]:
         return [("steady_state", f"{self.steady_state.value} ({self.steady_state_detail})", ""),
                 ("dissipation_per_cycle", self.dissipation_per_cycle, self.dissipation_unit),
@@ -327,6 +349,17 @@ class RunResult(_Contract):
                 ("residual", self.residual, "1"),
                 ("converged", self.converged, ""),
                 ("message", self.message, "")]
+
+    def with_shared(self, summary: dict) -> dict:
+        """``summary`` completed with the shared entries it lacks (:meth:`shared_summary`)
+        and their units; the model's own entries are kept."""
+        shared = self.shared_summary()
+        units = summary.setdefault("units", {})
+        for key, unit in shared.pop("units").items():
+            units.setdefault(key, unit)
+        for key, value in shared.items():
+            summary.setdefault(key, value)
+        return summary
 
     def __repr__(self) -> str:
         d = self.dissipation_per_cycle
@@ -349,8 +382,8 @@ class StudyResult(_Contract):
     :class:`slipcycle.studies.w_hat_map.WHatMapResult`,
     :class:`slipcycle.studies.limits.LimitsResult` and the other studies of
     :mod:`slipcycle.studies`) hold the analysis' numbers as fields and
-    implement :meth:`summary`, :meth:`to_dataset` (the one place the analysis' Dataset is
-    built), :meth:`figures` and :meth:`headline`; they set :attr:`model`,
+    implement :meth:`summary`, :meth:`_build_dataset` (the one place the analysis' Dataset
+    is built), :meth:`figures` and :meth:`headline`; they set :attr:`model`,
     :attr:`analysis` and :attr:`FLAGS`.
 
     Attributes

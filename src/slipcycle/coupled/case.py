@@ -69,7 +69,6 @@ class CoupledResult(RunResult):
 
     case: Any
     solution: Any
-    wall_time_s: float
 
     @property
     def wall_time(self) -> float:

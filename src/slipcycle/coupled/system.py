@@ -11,7 +11,7 @@ import numpy as np
 
 from slipcycle.errors import ModelError
 
-__all__ = ["CoupledSystem"]
+__all__ = ["CoupledSystem", "coupled_stiffness", "friction_per_node"]
 
 
 class CoupledSystem:
@@ -62,3 +62,37 @@ class CoupledSystem:
                              f"f_crit = {fc.f_crit:.6g} ({fc.method}; "
                              f"{self._ill_posed_nodes(fc)}): {self.ILL_POSED}",
                              remedy=("accept_ill_posed", True, "run anyway"))
+
+
+def coupled_stiffness(A: np.ndarray, B: np.ndarray, C: np.ndarray,
+                      error: type[ModelError] = ModelError) -> np.ndarray:
+    """The reduced stiffness K = [[A, Bᵀ], [B, C]] [N/m], refused (keyed ``B``) unless it is
+    positive definite (Cholesky; the eigenvalue only for the message)."""
+    K = np.block([[A, B.T], [B, C]])
+    try:
+        np.linalg.cholesky(K)
+    except np.linalg.LinAlgError:
+        eig = np.linalg.eigvalsh(K)[0]
+        raise error("B", "K = [[A, Bᵀ], [B, C]] is not positive definite "
+                         f"(smallest eigenvalue {eig:.6g}): the coupling B is too "
+                         "large for A and C") from None
+    return K
+
+
+def friction_per_node(friction, n: int, error: type[ModelError] = ModelError) -> np.ndarray:
+    """The friction coefficient of each of the n nodes, (n,) [1]: a number for all or one
+    per node, finite and ≥ 0 (keyed ``friction``)."""
+    try:
+        f = np.asarray(friction, dtype=float)
+    except (TypeError, ValueError):
+        raise error("friction", "must be a number or a list of numbers") from None
+    if f.ndim == 0:
+        f = np.full(n, float(f))
+    if f.shape != (n,):
+        raise error("friction", f"must be a number or a list of {n} numbers, got shape "
+                                f"{f.shape}")
+    if not np.all(np.isfinite(f)):
+        raise error("friction", "must be finite")
+    if np.any(f < 0):
+        raise error("friction", f"must be >= 0, got {f[f < 0][0]:g}")
+    return f

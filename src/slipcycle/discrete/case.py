@@ -332,7 +332,7 @@ class DiscreteResult(CoupledResult):
         return {"events_total": int(sum(res.events_per_cycle)),
                 "events_last_cycle": int(res.events_per_cycle[-1])}
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """States, reactions and node states of every cycle run; loads, dissipation and
         slip lengths (units on every variable)."""
         return _dataset(self.case, self.solution)

@@ -21,7 +21,7 @@ from functools import cached_property
 
 import numpy as np
 
-from slipcycle.coupled.system import CoupledSystem
+from slipcycle.coupled.system import CoupledSystem, coupled_stiffness, friction_per_node
 from slipcycle.errors import ModelError
 
 __all__ = ["FrictionalSystem", "ModelError", "STICK", "SLIP_POS", "SLIP_NEG", "SEPARATED",
@@ -119,27 +119,8 @@ class FrictionalSystem(CoupledSystem):
         _check_spd("C", C)
         A = 0.5 * (A + A.T)
         C = 0.5 * (C + C.T)
-        K = np.block([[A, B.T], [B, C]])
-        try:
-            np.linalg.cholesky(K)
-        except np.linalg.LinAlgError:
-            eig = np.linalg.eigvalsh(K)[0]
-            raise ModelError("B", "K = [[A, Bᵀ], [B, C]] is not positive definite "
-                                  f"(smallest eigenvalue {eig:.6g}): the coupling B is too "
-                                  "large for A and C") from None
-        try:
-            f = np.asarray(self.friction, dtype=float)
-        except (TypeError, ValueError):
-            raise ModelError("friction", "must be a number or a list of numbers") from None
-        if f.ndim == 0:
-            f = np.full(n, float(f))
-        if f.shape != (n,):
-            raise ModelError("friction", f"must be a number or a list of {n} numbers, got "
-                                         f"shape {f.shape}")
-        if not np.all(np.isfinite(f)):
-            raise ModelError("friction", "must be finite")
-        if np.any(f < 0):
-            raise ModelError("friction", f"must be >= 0, got {f[f < 0][0]:g}")
+        K = coupled_stiffness(A, B, C)
+        f = friction_per_node(self.friction, n)
         for name, val in (("A", A), ("B", B), ("C", C), ("friction", f), ("K", K)):
             val = np.array(val, dtype=float)
             val.setflags(write=False)

@@ -32,8 +32,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from slipcycle.coupled.cycles import CycleHistory, assemble, ratchet_residual, run_scales
-from slipcycle.coupled.settings import SolverStats
+from slipcycle.coupled.cycles import CycleHistory, assemble, run_scales
+from slipcycle.coupled.driver import SKIP, STEADY, CycleState, PlainCycling, run_cycles
+from slipcycle.coupled.settings import RunSettings, SolverStats
 from slipcycle.coupled.solution import CYCLE_CLASSES, CycleSolution, last_cycle
 from slipcycle.discrete.evolution import Evolution
 from slipcycle.discrete.lcp import lemke
@@ -406,176 +407,212 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     -------
     SteadyResult
     """
-    n = system.n_nodes
+    settings = RunSettings(cycles=cycles, steps_per_cycle=steps_per_cycle, tol=tol,
+                           min_cycles=min_cycles)
     theta, vals, F, disp_scale = run_scales(system, load, steps_per_cycle, protocol)
     evo = _assembled(system, vals[0], F, initial_slip, protocol)
     x_init = evo.x.copy()
-    history = CycleHistory(disp_scale, record, [evo.x.copy()])
-    starts, events = history.starts, []
-    state, residual, totals = "not_converged", np.inf, None
-    increment_steady = False
-    ratchet = np.zeros(n)
-    accel = (n >= ACCELERATE_MIN_NODES) if accelerate is None else bool(accelerate)
-    jstats = {"periodic_attempts": 0, "periodic_steps": 0, "periodic_steps_rejected": 0,
-              "cycles_discarded": 0,
-              "slow_mode_steps": 0, "slow_mode_steps_rejected": 0}
-    targets = set()        # indices into ``starts`` that are targets of a periodic step
-    saved = None           # what to restore if the cycle checking a periodic step fails
-    rejects_left, wait = MAX_PERIODIC_REJECTIONS, 0
-    slow_left = MAX_SLOW_REJECTIONS if slow_modes else 0
-    no_step = 0            # cycles in a row in which the follower found no step
-    fruitless = 0          # attempts in a row that found no step (the back-off)
-    moving_prev = None     # nodes the events of the last kept cycle moved
-    inequalities = False   # record the inequalities too (the last attempt asked for them)
-    for c in range(cycles):
+    run = CycleState(system, evo, settings, CycleHistory(disp_scale, record, [evo.x.copy()]),
+                     vals[0], F)
+    accel = (system.n_nodes >= ACCELERATE_MIN_NODES) if accelerate is None else bool(accelerate)
+    steps = PieceSteps(accel, slow_modes)
+    run_cycles(run, theta, vals, steps, progress)
+    return _steady_result(system, evo, run.state, run.residual, run.ratchet, run.totals,
+                          run.starts, steps.events, run.history.dissipation,
+                          run.history.records(), theta, vals, tol, disp_scale, F, x_init,
+                          steps.stats)
+
+
+class PieceSteps(PlainCycling):
+    """The accelerator of the exact 2-D engine: steps on the piecewise-affine cycle map.
+
+    Where the same nodes moved in the last two cycles, the periodic follower
+    (:func:`_periodic_target`) follows plain cycling on the current piece of the map and
+    skips to where it leaves the piece or to its limit; where it keeps finding no step
+    it backs off (:data:`ATTEMPTS_BEFORE_WAIT`, :data:`MAX_ATTEMPT_WAIT`). With
+    ``slow_modes``, where it found none for :data:`SLOW_AFTER` cycles, a step along the
+    slow modes of the cycle's Jacobian (:func:`_slow_mode_target`). Every step is checked
+    by the next, exact, cycle and undone when that cycle refuses it. With ``accel`` off
+    this is plain cycling (the exact engine's events are still counted).
+
+    Parameters
+    ----------
+    accel : bool
+        Take steps at all.
+    slow_modes : bool
+        Also the slow-mode steps.
+    """
+
+    def __init__(self, accel: bool, slow_modes: bool):
+        super().__init__()
+        self.accel = accel
+        self.events = []               # events located in each cycle kept
+        self.stats = {"periodic_attempts": 0, "periodic_steps": 0,
+                      "periodic_steps_rejected": 0, "cycles_discarded": 0,
+                      "slow_mode_steps": 0, "slow_mode_steps_rejected": 0}
+        self.targets = set()           # indices into ``starts`` that are targets of a step
+        self.saved = None              # what to restore if the checking cycle refuses
+        self.rejects_left, self.wait = MAX_PERIODIC_REJECTIONS, 0
+        self.slow_left = MAX_SLOW_REJECTIONS if slow_modes else 0
+        self.no_step = 0               # cycles in a row in which the follower found no step
+        self.fruitless = 0             # attempts in a row that found no step (back-off)
+        self.moving_prev = None        # nodes the events of the last kept cycle moved
+        self.inequalities = False      # record the inequalities (the last attempt asked)
+        self.attempt = False
+        self.checking = self.moving = None
+        self.near, self.same = np.inf, False
+
+    def before_cycle(self, run: CycleState) -> None:
         # record what a step needs only in a cycle that may attempt one
-        attempt = accel and (rejects_left > 0 or slow_left > 0) and wait == 0
-        evo.jacobian_log = [] if attempt else None
-        evo.margin_log = [] if attempt and inequalities else None
-        inequalities = False
-        totals = evo.follow(theta, vals, record=record)
-        evo.resync()
-        if progress is not None:
-            progress(c + 1, cycles)
-        history.add(evo.x, totals)
-        events.append(totals.events)
-        d1, xscale, residual = history.increment()
-        checking, saved = saved, None
+        self.attempt = (self.accel and (self.rejects_left > 0 or self.slow_left > 0)
+                        and self.wait == 0)
+        run.evo.jacobian_log = [] if self.attempt else None
+        run.evo.margin_log = [] if self.attempt and self.inequalities else None
+        self.inequalities = False
+
+    def after_cycle(self, run: CycleState) -> None:
+        self.events.append(run.totals.events)
+
+    def ratchet_test(self, run: CycleState) -> bool:
+        return len(run.starts) >= 3 and len(run.starts) - 2 not in self.targets
+
+    def judge(self, run: CycleState) -> str | None:
+        starts, tol, totals = run.starts, run.settings.tol, run.totals
+        checking, self.saved = self.saved, None
         # the rest of a geometric creep must be below the tolerance too (not after a step)
-        near = residual if checking is not None or len(starts) - 2 in targets else \
-            creep_distance(starts, residual, xscale)
+        self.near = run.residual if checking is not None or len(starts) - 2 in self.targets \
+            else creep_distance(starts, run.residual, run.xscale)
         # nodes that slipped (beyond round-off) or opened in this cycle
-        moving = frozenset(np.flatnonzero((totals.slip_length > 1e-3 * tol * xscale)
-                                          | totals.separated).tolist()) if accel else None
-        refuse = False
-        if checking is not None and checking[5] is SLOW:
-            # a slow-mode step: the cycle from it must not creep off (a step off its
-            # piece lands where the residual grows)
-            refuse = residual > SLOW_GROWTH * checking[3]
-        elif checking is not None and checking[5] is not None:
-            # a skip: the checking cycle must land where plain cycling goes
-            skip = float(np.max(np.abs(starts[-2] - checking[0])))
-            refuse = (np.max(np.abs(starts[-1] - checking[5]))
-                      > SKIP_MATCH * skip + 1e-3 * tol * xscale)
-        elif checking is not None:
-            # a periodic state: the cycle from it stays on its piece and gets closer
-            refuse = (not _same_piece(moving, checking[4], totals, 10 * tol * F)
-                      or residual > 0.5 * checking[3])
+        moving = frozenset(np.flatnonzero((totals.slip_length > 1e-3 * tol * run.xscale)
+                                          | totals.separated).tolist()) if self.accel else None
+        refuse = checking is not None and self._refused(run, checking, moving)
         if refuse:
-            residual = np.inf
+            run.residual = np.inf
         # the last increment alone below the tolerance: steady if the cycles run out
         # before the creep's distance is too (the test before that estimate)
-        increment_steady = residual <= tol and c + 1 >= min_cycles
-        if c + 1 < min_cycles and checking is None:
-            moving_prev = moving
-            continue
+        run.increment_steady = run.residual <= tol and run.counted
+        if not run.counted and checking is None:
+            self.moving_prev = moving
+            return SKIP
         # a steady state that plain cycling would accept is polished by one more step
         # (when the last two cycles allow one) to POLISH·tol, closer to the true limit
-        same = moving_prev is not None and moving == moving_prev   # the same nodes slipped
-        polish = (attempt and rejects_left > 0 and c + 1 < cycles and same
-                  and checking is None and residual > POLISH * tol)
+        same = self.moving_prev is not None and moving == self.moving_prev
+        polish = (self.attempt and self.rejects_left > 0 and not run.last and same
+                  and checking is None and run.residual > POLISH * tol)
         # where slow-mode steps are on, a residual below the tolerance is not yet steady:
         # the creep's remaining distance is about residual / (1 − λ), and the next slow-mode
         # step says whether it is below the tolerance (else it takes the step)
-        polish = polish or (slow_left > 0 and c + 1 < cycles and no_step >= SLOW_AFTER
-                            and attempt and residual > POLISH * tol)
-        if near <= tol and c + 1 >= min_cycles and not polish:
-            state = "steady"
-            break
+        polish = polish or (self.slow_left > 0 and not run.last
+                            and self.no_step >= SLOW_AFTER and self.attempt
+                            and run.residual > POLISH * tol)
+        if self.near <= tol and run.counted and not polish:
+            return STEADY
         if refuse:
-            # the step did not go where plain cycling goes (it left the piece of the
-            # cycle map it was computed on): discard the checking cycle and go on cycling
-            # from where the step was taken
-            history.drop_last()
-            events.pop()
-            targets.discard(len(starts) - 1)
-            starts[-1], evo.modes, totals, residual, moving_prev = checking[:5]
-            evo.x = starts[-1].copy()
-            evo.resync()
-            slow = checking[5] is SLOW
-            jstats["periodic_steps_rejected"] += 1
-            jstats["slow_mode_steps_rejected"] += slow
-            jstats["cycles_discarded"] += 1
-            if slow:
-                slow_left -= 1
-            else:
-                rejects_left -= 1
-            wait = 1 if slow else 2
-            if residual <= tol and c + 1 >= min_cycles:
-                state = "steady"      # the state the refused polishing step started from
-                break
-            continue
-        if len(starts) >= 3 and len(starts) - 2 not in targets:
-            rres = ratchet_residual(starts, d1, xscale, tol)
-            if rres is not None:
-                ratchet = d1[:n]
-                residual = rres
-                state = "ratcheting"
-                break
-        if attempt and c + 1 < cycles:
-            jstats["periodic_attempts"] += 1
-            # the follower where the same nodes moved in the last two cycles (the cycle
-            # map on one piece), then the slow modes where it found no step for a while
-            follow = same and rejects_left > 0
-            jac = (_cycle_piece(evo, system, d1, tol * xscale)
-                   if follow or (slow_left > 0 and no_step + 1 >= SLOW_AFTER) else None)
-            step = None
-            if follow and jac is not None:
-                step = _periodic_target(evo, system, jac, starts[-2], d1, vals[0],
-                                        tol * xscale)
-            inequalities = step is RECORD
-            target, predicted = (None, None) if step is None or step is RECORD else step
-            no_step = no_step + 1 if target is None else 0
-            # back off where the follower keeps finding nothing (not while slow-mode
-            # steps, which need every cycle's Jacobian, are on; a cycle that asks for
-            # the inequalities is part of the same attempt)
-            if step is not None and step is not RECORD:
-                fruitless = 0
-            elif step is None:
-                fruitless += 1
-                if slow_left == 0 and fruitless >= ATTEMPTS_BEFORE_WAIT:
-                    wait = max(wait, min(2 ** (fruitless - ATTEMPTS_BEFORE_WAIT),
-                                         MAX_ATTEMPT_WAIT))
-            settled = True     # no slow mode says the state is still far from periodic
-            if (target is None and jac is not None and slow_left > 0
-                    and no_step >= SLOW_AFTER):
-                # the piece changes every cycle: step along the slow modes of this one
-                # where the state creeps slowly (the last increment kept SLOW_CREEP of the
-                # one before; a step from the first cycles, before that shows,
-                # extrapolates a transient and lands on another periodic state)
-                creep = len(starts) >= 3 and (
-                    len(starts) - 2 in targets
-                    or np.max(np.abs(d1)) >= SLOW_CREEP * np.max(np.abs(starts[-2]
-                                                                       - starts[-3])))
-                if creep:
-                    target, remaining = _slow_mode_target(evo, system, jac, starts[-1],
-                                                          d1, vals[0], tol * xscale)
-                    predicted = SLOW
-                    settled = remaining <= tol * xscale
+            return self._undo(run, checking)
+        self.moving, self.same = moving, same
+        return None
+
+    def _refused(self, run: CycleState, checking: tuple, moving: frozenset) -> bool:
+        """Whether the cycle run from a step's target refuses the step."""
+        starts, tol = run.starts, run.settings.tol
+        if checking[5] is SLOW:
+            # a slow-mode step: the cycle from it must not creep off (a step off its
+            # piece lands where the residual grows)
+            return run.residual > SLOW_GROWTH * checking[3]
+        if checking[5] is not None:
+            # a skip: the checking cycle must land where plain cycling goes
+            skip = float(np.max(np.abs(starts[-2] - checking[0])))
+            return bool(np.max(np.abs(starts[-1] - checking[5]))
+                        > SKIP_MATCH * skip + 1e-3 * tol * run.xscale)
+        # a periodic state: the cycle from it stays on its piece and gets closer
+        return (not _same_piece(moving, checking[4], run.totals, 10 * tol * run.F)
+                or run.residual > 0.5 * checking[3])
+
+    def _undo(self, run: CycleState, checking: tuple) -> str:
+        """Discard the checking cycle of a refused step (it left the piece of the cycle
+        map it was computed on) and go on cycling from where the step was taken."""
+        starts = run.starts
+        run.history.drop_last()
+        self.events.pop()
+        self.targets.discard(len(starts) - 1)
+        starts[-1], run.evo.modes, run.totals, run.residual, self.moving_prev = checking[:5]
+        run.restart(starts[-1])
+        slow = checking[5] is SLOW
+        self.stats["periodic_steps_rejected"] += 1
+        self.stats["slow_mode_steps_rejected"] += slow
+        self.stats["cycles_discarded"] += 1
+        if slow:
+            self.slow_left -= 1
+        else:
+            self.rejects_left -= 1
+        self.wait = 1 if slow else 2
+        if run.residual <= run.settings.tol and run.counted:
+            return STEADY      # the state the refused polishing step started from
+        return SKIP
+
+    def step(self, run: CycleState) -> str | None:
+        if self.attempt and not run.last:
+            target, predicted, settled = self._target(run)
             # a slow-mode step still possible (above round-off) does not keep a state
             # from being steady once the slow modes' whole remaining distance is below the
             # tolerance: the steps would only chase the round-off of the cycle
-            if (near <= tol and c + 1 >= min_cycles and settled
+            if (self.near <= run.settings.tol and run.counted and settled
                     and (target is None or predicted is SLOW)):
-                state = "steady"
-                break
+                return STEADY
             if target is not None:
-                jstats["periodic_steps"] += 1
-                jstats["slow_mode_steps"] += predicted is SLOW
-                saved = (starts[-1].copy(), evo.modes.copy(), totals, residual, moving,
-                         predicted)
-                starts[-1] = target
-                targets.add(len(starts) - 1)
-                evo.x = target.copy()
-                evo.resync()
-        wait = max(wait - 1, 0)
-        moving_prev = moving
-    if state == "not_converged" and increment_steady:
-        state = "steady"
-    return _steady_result(system, evo, state, residual, ratchet, totals, starts, events,
-                          history.dissipation, history.records(), theta, vals, tol, disp_scale, F,
-                          x_init, jstats)
+                self.stats["periodic_steps"] += 1
+                self.stats["slow_mode_steps"] += predicted is SLOW
+                self.saved = (run.starts[-1].copy(), run.evo.modes.copy(), run.totals,
+                              run.residual, self.moving, predicted)
+                run.starts[-1] = target
+                self.targets.add(len(run.starts) - 1)
+                run.restart(target)
+        self.wait = max(self.wait - 1, 0)
+        self.moving_prev = self.moving
+        return None
 
+    def _target(self, run: CycleState):
+        """The follower's step, else a slow-mode step: (target, predicted, settled)."""
+        evo, system, starts, d1 = run.evo, run.system, run.starts, run.d1
+        drift_tol = run.settings.tol * run.xscale
+        self.stats["periodic_attempts"] += 1
+        # the follower where the same nodes moved in the last two cycles (the cycle
+        # map on one piece), then the slow modes where it found no step for a while
+        follow = self.same and self.rejects_left > 0
+        jac = (_cycle_piece(evo, system, d1, drift_tol)
+               if follow or (self.slow_left > 0 and self.no_step + 1 >= SLOW_AFTER) else None)
+        step = None
+        if follow and jac is not None:
+            step = _periodic_target(evo, system, jac, starts[-2], d1, run.r_w0, drift_tol)
+        self.inequalities = step is RECORD
+        target, predicted = (None, None) if step is None or step is RECORD else step
+        self.no_step = self.no_step + 1 if target is None else 0
+        # back off where the follower keeps finding nothing (not while slow-mode
+        # steps, which need every cycle's Jacobian, are on; a cycle that asks for
+        # the inequalities is part of the same attempt)
+        if step is not None and step is not RECORD:
+            self.fruitless = 0
+        elif step is None:
+            self.fruitless += 1
+            if self.slow_left == 0 and self.fruitless >= ATTEMPTS_BEFORE_WAIT:
+                self.wait = max(self.wait, min(2 ** (self.fruitless - ATTEMPTS_BEFORE_WAIT),
+                                               MAX_ATTEMPT_WAIT))
+        settled = True     # no slow mode says the state is still far from periodic
+        if (target is None and jac is not None and self.slow_left > 0
+                and self.no_step >= SLOW_AFTER):
+            # the piece changes every cycle: step along the slow modes of this one where
+            # the state creeps slowly (the last increment kept SLOW_CREEP of the one
+            # before; a step from the first cycles, before that shows, extrapolates a
+            # transient and lands on another periodic state)
+            creep = len(starts) >= 3 and (
+                len(starts) - 2 in self.targets
+                or np.max(np.abs(d1)) >= SLOW_CREEP * np.max(np.abs(starts[-2] - starts[-3])))
+            if creep:
+                target, remaining = _slow_mode_target(evo, system, jac, starts[-1], d1,
+                                                      run.r_w0, drift_tol)
+                predicted = SLOW
+                settled = remaining <= drift_tol
+        return target, predicted, settled
 
 
 def _assembled(system: FrictionalSystem, r0: np.ndarray, F: float,

@@ -221,7 +221,7 @@ class DiscreteResult3D(CoupledResult):
             "newton_iterations": int(res.solver_stats.get("newton_iterations", 0)),
         }
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """States, reactions and node states of every cycle, with the node coordinates
         and frames (every variable has ``units`` and ``long_name``)."""
         s, res = self.case.system, self.solution

@@ -30,7 +30,7 @@ from functools import cached_property
 
 import numpy as np
 
-from slipcycle.coupled.system import CoupledSystem
+from slipcycle.coupled.system import CoupledSystem, coupled_stiffness, friction_per_node
 from slipcycle.discrete3d.wellposed import critical_friction_3d
 from slipcycle.errors import ModelError
 
@@ -160,25 +160,8 @@ class FrictionalSystem3D(CoupledSystem):
         A = _check_spd("A", _matrix("A", self.A, (2 * n, 2 * n)))
         C = _check_spd("C", _matrix("C", C, (n, n)))
         B = _matrix("B", self.B, (n, 2 * n))
-        K = np.block([[A, B.T], [B, C]])
-        try:
-            np.linalg.cholesky(K)
-        except np.linalg.LinAlgError:
-            eig = np.linalg.eigvalsh(K)[0]
-            raise ModelError3D("B", "K = [[A, Bᵀ], [B, C]] is not positive definite "
-                                    f"(smallest eigenvalue {eig:.6g}): the coupling B is too "
-                                    "large for A and C") from None
-        try:
-            f = np.asarray(self.friction, dtype=float)
-        except (TypeError, ValueError):
-            raise ModelError3D("friction", "must be a number or a list of numbers") from None
-        if f.ndim == 0:
-            f = np.full(n, float(f))
-        if f.shape != (n,):
-            raise ModelError3D("friction", f"must be a number or a list of {n} numbers, got "
-                                           f"shape {f.shape}")
-        if not np.all(np.isfinite(f)) or np.any(f < 0):
-            raise ModelError3D("friction", "must be finite and >= 0")
+        K = coupled_stiffness(A, B, C, ModelError3D)
+        f = friction_per_node(self.friction, n, ModelError3D)
         coords = _optional("coordinates", self.coordinates, (n, 3))
         if coords is None:
             coords = np.column_stack([np.arange(n, dtype=float), np.zeros(n), np.zeros(n)])

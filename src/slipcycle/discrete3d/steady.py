@@ -97,8 +97,9 @@ from scipy.optimize import nnls
 
 from slipcycle.coupled.anderson import anderson as _anderson
 from slipcycle.coupled.anderson import geometric as _geometric
-from slipcycle.coupled.cycles import CycleHistory, assemble, ratchet_residual, run_scales
-from slipcycle.coupled.settings import SolverStats
+from slipcycle.coupled.cycles import CycleHistory, assemble, run_scales
+from slipcycle.coupled.driver import SKIP, STEADY, CycleState, PlainCycling, run_cycles
+from slipcycle.coupled.settings import RunSettings, SolverStats
 from slipcycle.coupled.solution import CYCLE_CLASSES, CycleSolution, last_cycle
 from slipcycle.discrete3d.evolution import Evolution3D
 from slipcycle.discrete3d.loads import Load3D
@@ -268,71 +269,156 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     -------
     SteadyResult3D
     """
-    n = system.n_nodes
+    settings = RunSettings(cycles=cycles, steps_per_cycle=steps_per_cycle, tol=tol,
+                           min_cycles=min_cycles, step_tol=step_tol, replay=replay)
     theta, vals, F, disp_scale = run_scales(system, load, steps_per_cycle, protocol)
     opts = {"step_tol": step_tol, "adaptive": adaptive, "substeps": substeps,
             "extrapolate": extrapolate}
     evo = assemble(lambda x0, rw: Evolution3D(system, x0, rw, F, **opts), system, vals[0], F,
                    initial_slip, protocol, initial_state_3d)
-    history = CycleHistory(disp_scale, record, [evo.x.copy()])
-    starts, steps, refs = history.starts, [], []
-    state, residual, totals = "not_converged", np.inf, None
-    ratchet = np.zeros(2 * n)
-    unresolved = 0
-    # acceleration: ``pairs`` the (start, end) states (x_i, P(x_i)) of the cycles of the
-    # current run with one pattern, ``run_jumps`` the jumps made in it, ``pattern`` that
-    # pattern; ``best`` (end state, residual, cycles since) the best cycle since the
-    # run's first jump, the state cycling resumes from if the jumps fail
-    pairs, pattern, run_jumps, best = [], None, 0, None
-    jumps = undone = 0
-    plain_from = 0          # starts[plain_from:] are successive plain cycles
-    res_prev = np.inf
-    probation = None        # (state before the last jump, residuals since it)
-    # frozen subdivision: ``replaying`` the cycles run on evo.plan since it was frozen,
-    # ``verify`` the next cycle is the checked replay of a replayed fixed point
-    replay = replay and adaptive
-    replaying, verify, freezes, replayed, mismatches = 0, False, 0, 0, 0
+    run = CycleState(system, evo, settings, CycleHistory(disp_scale, record, [evo.x.copy()]),
+                     vals[0], F)
+    mix = Mixing(accelerate, accel_order, replay and adaptive, replay_check, replay_max)
+    run_cycles(run, theta, vals, mix)
+    history, totals = run.history, run.totals
+    stats = SolverStats(solver=dict(evo.solver.stats), jumps=mix.jumps,
+                        jumps_undone=mix.undone, replayed_cycles=mix.replayed,
+                        replay_freezes=mix.freezes, replay_mismatches=mix.mismatches)
+    return SteadyResult3D(
+        residual=run.residual, cycles_run=len(history.dissipation), theta=theta,
+        force_scale=F, steps_per_cycle_taken=mix.steps, refinements_per_cycle=mix.refs,
+        dissipation_history=history.dissipation, normal_work=totals.normal_work,
+        solver_stats=stats, unresolved_steps=mix.unresolved,
+        **last_cycle(system, run.state, run.ratchet, totals, run.starts, tol, disp_scale,
+                     vals[0], history.records(), len(theta)))
 
-    def switch_map():
-        # the cycle map changes (frozen ↔ adaptive): the extrapolation's sequence and the
-        # ratcheting test restart with cycles of the new map
-        nonlocal pairs, pattern, plain_from, res_prev, run_jumps, best
-        pairs, pattern, plain_from, res_prev, run_jumps, best = [], None, \
-            len(starts) - 1, np.inf, 0, None
 
-    for c in range(cycles):
-        increment_steady = False      # (module docstring: cycles that run out)
-        was_replay, was_verify = evo.plan is not None, verify
-        verify = False
-        if was_replay:
+class Mixing(PlainCycling):
+    """The accelerator of the 3-D engine: Anderson mixing of the start-of-cycle states,
+    and the replay of a frozen subdivision of the step control (module docstring).
+
+    Once the pattern of slipping / separated / stuck nodes repeats and the changes of the
+    plain cycles shrink geometrically, the start is extrapolated to the limit
+    (:func:`~slipcycle.coupled.anderson.anderson`), then every following cycle of the
+    pattern is mixed; jumps that fail (a stuck node's memory changes, the residual grows
+    or stalls) are undone. With ``replay`` the subdivision of a repeating pattern is
+    frozen and replayed, and a fixed point of the replayed map is verified by a replay
+    with every error estimate checked.
+
+    Parameters
+    ----------
+    accelerate : bool
+        The Anderson jumps (False: plain cycling, with replay if asked).
+    accel_order : int
+        Differences (beyond one) the first jump combines.
+    replay : bool
+        Freeze and replay the step control's subdivision.
+    replay_check : int
+        Every this many replayed cycles the error estimates are checked as well.
+    replay_max : int
+        Most subdivisions frozen.
+    """
+
+    def __init__(self, accelerate: bool, accel_order: int, replay: bool, replay_check: int,
+                 replay_max: int):
+        super().__init__()
+        self.accelerate, self.accel_order = accelerate, accel_order
+        self.replay, self.replay_check, self.replay_max = replay, replay_check, replay_max
+        self.steps, self.refs, self.unresolved = [], [], 0
+        # ``pairs`` the (start, end) states (x_i, P(x_i)) of the cycles of the current run
+        # with one pattern, ``run_jumps`` the jumps made in it, ``pattern`` that pattern;
+        # ``best`` (end state, residual, cycles since) the best cycle since the run's
+        # first jump, the state cycling resumes from if the jumps fail
+        self.pairs, self.pattern, self.run_jumps, self.best = [], None, 0, None
+        self.jumps = self.undone = 0
+        self.res_prev = np.inf
+        self.probation = None   # (state before the last jump, residuals since it)
+        # frozen subdivision: ``replaying`` the cycles run on evo.plan since it was frozen,
+        # ``verify`` the next cycle is the checked replay of a replayed fixed point
+        self.replaying, self.verify, self.freezes, self.replayed = 0, False, 0, 0
+        self.mismatches = 0
+        self.was_replay = self.was_verify = False
+        self.pat = None
+
+    def before_cycle(self, run: CycleState) -> None:
+        evo = run.evo
+        self.was_replay, self.was_verify = evo.plan is not None, self.verify
+        self.verify = False
+        if self.was_replay:
             # the error estimates are checked in the verifying cycle, and every
             # ``replay_check``-th cycle outside the jumps (which need one fixed map)
-            evo.check_plan = was_verify or (best is None and replaying % max(
-                replay_check, 1) == replay_check - 1)
-        totals = evo.follow(theta, vals, record=record)
-        evo.resync()
-        unresolved += totals.unresolved
-        if was_replay:
-            replaying += 1
-            replayed += 1
-            mismatches += totals.replay_mismatches
-        history.add(evo.x, totals)
-        steps.append(totals.steps)
-        refs.append(totals.refinements)
-        d1, xscale, residual = history.increment()
-        cyc_tol = max(100 * tol, 1e-9) * xscale
-        pat = np.concatenate([totals.slip_length > cyc_tol, totals.separated])
+            evo.check_plan = self.was_verify or (self.best is None and self.replaying % max(
+                self.replay_check, 1) == self.replay_check - 1)
+
+    def after_cycle(self, run: CycleState) -> None:
+        totals = run.totals
+        self.unresolved += totals.unresolved
+        if self.was_replay:
+            self.replaying += 1
+            self.replayed += 1
+            self.mismatches += totals.replay_mismatches
+        self.steps.append(totals.steps)
+        self.refs.append(totals.refinements)
+
+    def _switch_map(self, run: CycleState) -> None:
+        # the cycle map changes (frozen ↔ adaptive): the extrapolation's sequence and the
+        # ratcheting test restart with cycles of the new map
+        self.pairs, self.pattern, self.plain_from, self.res_prev, self.run_jumps, \
+            self.best = [], None, len(run.starts) - 1, np.inf, 0, None
+
+    def judge(self, run: CycleState) -> str | None:
+        tol, residual, starts = run.settings.tol, run.residual, run.starts
+        cyc_tol = max(100 * tol, 1e-9) * run.xscale
+        self.pat = np.concatenate([run.totals.slip_length > cyc_tol, run.totals.separated])
+        verdict = self._jumps_failed(run)
+        if verdict is not None:
+            return verdict
+        if (self.was_replay and run.totals.replay_mismatches
+                and (self.best is None or self.was_verify)):
+            # the frozen subdivision no longer fits the path: freeze the subdivision this
+            # cycle ended with (the misfitting steps redone adaptively), or return to
+            # adaptive cycles once ``replay_max`` subdivisions have been frozen. (During
+            # the jumps the map stays the replay of the one subdivision, whose misfitting
+            # steps are redone adaptively in each cycle.)
+            run.evo.plan = run.totals.plan if self.freezes < self.replay_max else None
+            self.replaying = 0
+            self.freezes += run.evo.plan is not None
+            self._switch_map(run)
+            return SKIP
+        if not run.counted:
+            self.res_prev = residual
+            return SKIP
+        # the last increment, and the rest of a geometric creep of this map's plain
+        # cycles (not the check of a replayed fixed point; never below the increment),
+        # below the tolerance
+        run.increment_steady = residual <= tol and (not self.was_replay or self.was_verify)
+        near = residual if self.was_verify else creep_distance(starts[self.plain_from:],
+                                                               residual, run.xscale)
+        if near <= tol:
+            if not self.was_replay or self.was_verify:
+                return STEADY
+            # a fixed point of the replayed map: accepted only if a replay from it with
+            # every sub-step's error estimate checked fits the subdivision and
+            # reproduces it within tol
+            self.verify = True
+            return SKIP
+        return None
+
+    def _jumps_failed(self, run: CycleState) -> str | None:
+        """Undo the jumps where they fail (:data:`SKIP`), else None."""
+        tol, residual, starts, evo = run.settings.tol, run.residual, run.starts, run.evo
         stalled = False
-        if probation is not None and residual > tol and best is None:
-            hist = probation[1]
-            hist.append(residual)
+        if self.probation is not None and residual > tol and self.best is None:
+            since = self.probation[1]
+            since.append(residual)
             # after the jumps plain cycling must keep converging: over the last 4 cycles
             # the largest change at most 0.8 × that of the 4 before (a ratio ≤ 0.94 per
             # cycle); a stall (e.g. a small periodic orbit of the discretised cycle map
             # near the jumped state) undoes the jumps and ends the acceleration
-            stalled = len(hist) >= 8 and max(hist[-4:]) > 0.8 * max(hist[-8:-4])
+            stalled = len(since) >= 8 and max(since[-4:]) > 0.8 * max(since[-8:-4])
         failed = stalled
         memory = False
+        best = self.best
         if best is not None and residual > tol:
             # a jumped cycle: Anderson mixing is not monotone, so the residual may rise
             # for a while; the jumps fail if a node stuck and closed in every cycle of the
@@ -344,116 +430,80 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
                 best = (starts[-1].copy(), residual, 0)
             else:
                 best = (best[0], best[1], best[2] + 1)
-            memory = bool(np.any(pat & ~pattern))
+            self.best = best
+            memory = bool(np.any(self.pat & ~self.pattern))
             failed = (memory or residual > ANDERSON_GROWTH * best[1]
                       or best[2] > ANDERSON_PATIENCE)
-        if failed and not (memory or stalled) and undone < 2:
+        if failed and not (memory or stalled) and self.undone < 2:
             # the jump overshot (the map is not linear at its scale): go on from the end of
             # the best cycle with the secants gathered so far, this one's included
-            undone += 1
-            pairs.append((starts[-2], starts[-1]))
-            evo.x = best[0].copy()
-            evo.resync()
+            self.undone += 1
+            self.pairs.append((starts[-2], starts[-1]))
+            run.restart(best[0])
             starts[-1] = evo.x.copy()
-            best = (best[0], best[1], 0)
-            continue
+            self.best = (best[0], best[1], 0)
+            return SKIP
         if failed:
             # resume plain cycling from the end of the best cycle (before the first jump
             # if cycling stalled after them)
-            undone += 1
-            evo.x = (probation[0] if stalled else best[0]).copy()
-            accelerate = accelerate and not stalled
-            probation = best = None
-            evo.resync()
+            self.undone += 1
+            run.restart(self.probation[0] if stalled else best[0])
+            self.accelerate = self.accelerate and not stalled
+            self.probation = self.best = None
             starts[-1] = evo.x.copy()
-            pairs, pattern, plain_from, res_prev, run_jumps = [], None, \
-                len(starts) - 1, np.inf, 0
-            continue
-        if was_replay and totals.replay_mismatches and (best is None or was_verify):
-            # the frozen subdivision no longer fits the path: freeze the subdivision this
-            # cycle ended with (the misfitting steps redone adaptively), or return to
-            # adaptive cycles once ``replay_max`` subdivisions have been frozen. (During
-            # the jumps the map stays the replay of the one subdivision, whose misfitting
-            # steps are redone adaptively in each cycle.)
-            evo.plan, replaying = (totals.plan if freezes < replay_max else None), 0
-            freezes += evo.plan is not None
-            switch_map()
-            continue
-        if c + 1 < min_cycles:
-            res_prev = residual
-            continue
-        # the last increment, and the rest of a geometric creep of this map's plain
-        # cycles (not the check of a replayed fixed point; never below the increment),
-        # below the tolerance
-        increment_steady = residual <= tol and (not was_replay or was_verify)
-        near = residual if was_verify else creep_distance(starts[plain_from:], residual,
-                                                          xscale)
-        if near <= tol:
-            if not was_replay or was_verify:
-                state = "steady"
-                break
-            # a fixed point of the replayed map: accepted only if a replay from it with
-            # every sub-step's error estimate checked fits the subdivision and
-            # reproduces it within tol
-            verify = True
-            continue
-        if len(starts) - plain_from >= 3:
-            rres = ratchet_residual(starts, d1, xscale, tol)
-            if rres is not None:
-                ratchet = d1[:2 * n]
-                residual = rres
-                state = "ratcheting"
-                break
-        if pattern is None or not np.array_equal(pat, pattern):
-            pairs, pattern, run_jumps, best = [(starts[-2], starts[-1])], pat, 0, None
+            self.pairs, self.pattern, self.plain_from, self.res_prev, self.run_jumps = \
+                [], None, len(starts) - 1, np.inf, 0
+            return SKIP
+        return None
+
+    def step(self, run: CycleState) -> str | None:
+        starts, pat = run.starts, self.pat
+        if self.pattern is None or not np.array_equal(pat, self.pattern):
+            self.pairs, self.pattern, self.run_jumps, self.best = \
+                [(starts[-2], starts[-1])], pat, 0, None
         else:
-            pairs.append((starts[-2], starts[-1]))
-            if (replay and evo.plan is None and freezes < replay_max and best is None
-                    and not was_verify):
+            self.pairs.append((starts[-2], starts[-1]))
+            if (self.replay and run.evo.plan is None and self.freezes < self.replay_max
+                    and self.best is None and not self.was_verify):
                 # the pattern repeats: freeze this cycle's subdivision (the replayed map
                 # equals the adaptive one at the states so far, which the extrapolation
                 # keeps using)
-                evo.plan, replaying = totals.plan, 0
-                freezes += 1
-        shrinking = residual < res_prev
-        res_prev = residual
+                run.evo.plan, self.replaying = run.totals.plan, 0
+                self.freezes += 1
+        shrinking = run.residual < self.res_prev
+        self.res_prev = run.residual
         # the first jump of a run is tried in the geometric regime only (the changes of its
         # plain cycles shrink by a steady ratio); after jumps that had to be undone, a
         # longer run of the pattern is required, and after three no more jumps are tried.
         # Then every cycle of the run jumps, with the secants of the jumped cycles
         # (Anderson mixing), until the run ends or the jumps fail
-        window = accel_order + 1
-        if run_jumps:
+        window = self.accel_order + 1
+        pairs = self.pairs
+        if self.run_jumps:
             ready = True
         else:
-            ready = (shrinking and len(pairs) >= window + 3 * undone
+            ready = (shrinking and len(pairs) >= window + 3 * self.undone
                      and _geometric(np.array([pairs[-window][0]]
                                              + [end for _, end in pairs[-window:]])))
-        if accelerate and c + 2 < cycles and undone < 3 and ready:
-            m = window if not run_jumps else ANDERSON_WINDOW
-            X = np.array([start for start, _ in pairs[-m:]])
-            x_star = _anderson(X, np.array([end for _, end in pairs[-m:]]))
-            if x_star is not None and np.all(np.isfinite(x_star)):
-                if best is None:
-                    best = (starts[-1].copy(), residual, 0)
-                if probation is None:
-                    probation = (starts[-1].copy(), [])
-                jumps += 1
-                run_jumps += 1
-                x_star[2 * n:] = np.maximum(x_star[2 * n:], 0.0)   # separations ≥ 0
-                evo.x = x_star
-                evo.resync()
-                starts[-1] = x_star.copy()
-                plain_from = len(starts) - 1
-    if state == "not_converged" and increment_steady:
-        state = "steady"          # the cycles ran out after the increment test
-    stats = SolverStats(solver=dict(evo.solver.stats), jumps=jumps, jumps_undone=undone,
-                        replayed_cycles=replayed, replay_freezes=freezes,
-                        replay_mismatches=mismatches)
-    return SteadyResult3D(
-        residual=residual, cycles_run=len(history.dissipation), theta=theta, force_scale=F,
-        steps_per_cycle_taken=steps, refinements_per_cycle=refs,
-        dissipation_history=history.dissipation, normal_work=totals.normal_work,
-        solver_stats=stats, unresolved_steps=unresolved,
-        **last_cycle(system, state, ratchet, totals, starts, tol, disp_scale, vals[0],
-                     history.records(), len(theta)))
+        if (self.accelerate and run.c + 2 < run.settings.cycles and self.undone < 3
+                and ready):
+            self._jump(run, window)
+        return None
+
+    def _jump(self, run: CycleState, window: int) -> None:
+        """Replace the next start by the Anderson extrapolation of the run's pairs."""
+        starts, n = run.starts, run.system.n_nodes
+        m = window if not self.run_jumps else ANDERSON_WINDOW
+        X = np.array([start for start, _ in self.pairs[-m:]])
+        x_star = _anderson(X, np.array([end for _, end in self.pairs[-m:]]))
+        if x_star is not None and np.all(np.isfinite(x_star)):
+            if self.best is None:
+                self.best = (starts[-1].copy(), run.residual, 0)
+            if self.probation is None:
+                self.probation = (starts[-1].copy(), [])
+            self.jumps += 1
+            self.run_jumps += 1
+            x_star[2 * n:] = np.maximum(x_star[2 * n:], 0.0)   # separations ≥ 0
+            run.restart(x_star)
+            starts[-1] = x_star.copy()
+            self.plain_from = len(starts) - 1

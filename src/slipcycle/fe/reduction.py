@@ -208,7 +208,7 @@ class ReducedModel(_Contract):
         out["units"] = {k: u for k, u in REDUCED_UNITS.items() if k in out}
         return out
 
-    def to_dataset(self):
+    def _build_dataset(self):
         """A, B, C (``node`` × ``node_j``) [N/m], q^w, p^w (``load_case`` × ``node``) [N
         per unit of the case], node coordinates x, y and gaps [m]: the arrays of the
         ``.npz`` with units."""

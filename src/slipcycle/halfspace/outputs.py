@@ -248,9 +248,11 @@ class HalfspaceResult(RunResult):
             if P0 and model.normal_control == "force":
                 summary["W_hat"] = w_hat(W, model, P0)
                 units["W_hat"] = "1"
-        return summary
+        # the shared entries (residual, converged, wall_time_s); state_change is the
+        # alias of residual, kept for one release
+        return self.with_shared(summary)
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """Histories per step, slider data per cycle and, for axisymmetric profiles, the
         tractions of the last cycle (units on every variable)."""
         model, bed, result = self.model_input, self.bed, self.history

@@ -351,8 +351,8 @@ class FEResult(RunResult):
         Every mesh, coarse → fine.
     mesh_convergence : MeshConvergence or None
         The study of the dissipation (None with one mesh or without a steady cycle).
-    wall_time : float
-        Seconds for every reduction and solution.
+    wall_time_s : float
+        Seconds for every reduction and solution (the shared field).
     """
 
     model: ClassVar[str] = "fe"
@@ -361,7 +361,6 @@ class FEResult(RunResult):
     finest: DiscreteResult
     meshes: tuple[MeshRun, ...]
     mesh_convergence: MeshConvergence | None
-    wall_time: float
 
     @classmethod
     def build(cls, fc: FECase, finest: DiscreteResult, meshes: tuple[MeshRun, ...],
@@ -378,7 +377,7 @@ class FEResult(RunResult):
                    converged=finest.converged,
                    message=f"{finest.message}; " + (text if ok else f"WARNING: {text}"),
                    fe_case=fc, finest=finest, meshes=meshes, mesh_convergence=mc,
-                   wall_time=wall)
+                   wall_time_s=wall)
 
     @property
     def flags(self) -> dict[str, tuple[str, ...]]:
@@ -403,7 +402,7 @@ class FEResult(RunResult):
         out.update(model="fe", geometry=self.fe_case.geometry, elements=last.elements,
                    n_dofs=last.n_dofs, node_spacing=last.spacing,
                    dissipation_per_cycle=last.dissipation,
-                   wall_time_s=self.wall_time)
+                   wall_time_s=self.wall_time_s)
         out.update(mesh_elements=[m.elements for m in self.meshes],
                    mesh_n_nodes=[m.n_nodes for m in self.meshes],
                    mesh_cycles_run=[m.cycles_run for m in self.meshes])
@@ -430,7 +429,7 @@ class FEResult(RunResult):
         out["units"] = units
         return out
 
-    def to_dataset(self):
+    def _build_dataset(self):
         """The finest mesh's histories and, along ``mesh``, the study: elements, nodes,
         spacing [m], dissipation [J], cycles run, steady flag; the extrapolation and
         the observed order as scalars."""

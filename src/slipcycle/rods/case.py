@@ -481,9 +481,11 @@ class RodsResult(RunResult):
             summary["regularisation"]["iwan_fit"] = reg.iwan_params
         summary["units"] = {k: v for k, v in RUN_UNITS.items()
                             if k.split(".")[0] in summary}
-        return summary
+        # the shared entries (residual, converged, wall_time_s); steady_residual and
+        # steady_state_reached are their aliases, kept for one release
+        return self.with_shared(summary)
 
-    def to_dataset(self):
+    def _build_dataset(self):
         """Dynamic and quasi-static loops over the last cycle (dimension ``time``) and,
         with the regularisation study, its amplitude sweep (units on every variable)."""
         import xarray as xr

@@ -148,7 +148,7 @@ class RegularisationResult(StudyResult, Mapping):
         out["units"] = {k: u for k, u in REG_UNITS.items() if k.split(".")[0] in out}
         return out
 
-    def to_dataset(self):
+    def _build_dataset(self):
         """The amplitude sweep (dimension ``amplitude`` [rad]): ``reg_T_<model>`` [N m] and
         ``reg_D_<model>`` [J] per model, the variables of the rods run Dataset."""
         import xarray as xr

@@ -462,7 +462,7 @@ class BasinsResult(BasinsStudyResult):
             summary["grid"] = [int(self.v1.size), int(self.v2.size)]
         return summary
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """Class codes, dissipation [J], cycles run, slipping nodes, memory erased and
         ``converged`` over the starts ((v2, v1) [m] for a grid, else the sweep axis).
 

@@ -305,7 +305,7 @@ class Basins3DResult(BasinsStudyResult):
                 "start_scale": self.start_scale, "wall_time_s": self.wall_time_s,
                 "units": dict(SUMMARY_UNITS)}
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """Class codes, dissipation [J], cycles run, residual, slipping and separating
         nodes, memory erased and ``converged`` over the starts.
 

@@ -271,7 +271,7 @@ class LimitsResult(StudyResult):
                             if k.split(".")[0] in summary}
         return summary
 
-    def to_dataset(self):
+    def _build_dataset(self):
         """Ratios, maximum torques [N m], dissipation [J], ``converged`` and ``pole`` over
         Ω/ω1; with maps, the ratios and ``converged`` over (map_frequency_ratio,
         amplitude_ratio) and (position, position_frequency_ratio).

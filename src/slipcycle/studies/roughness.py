@@ -614,7 +614,7 @@ class RoughnessResult(StudyResult):
             "fretting_map_max_density": "J/m^2", "wall_time_s": "s"}
         return s
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """The study as a Dataset (the only place it is built); units on every variable."""
         law, f = self.law, self.fit
         ds = xr.Dataset(coords={

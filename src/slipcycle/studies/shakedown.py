@@ -383,7 +383,7 @@ class ShakedownResult(StudyResult):
             summary["safe_region_vertices"] = polygon_vertices(region, self.lam)
         return summary
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """Classes and dissipation over (lam, start) and (trial_lam, start), G, h0, m and
         θ extreme over the constraints.
 

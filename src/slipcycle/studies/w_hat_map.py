@@ -283,7 +283,7 @@ class WHatMapResult(StudyResult):
                       "fig7_W_hat_max": "1"},
         }
 
-    def to_dataset(self) -> xr.Dataset:
+    def _build_dataset(self) -> xr.Dataset:
         """``W_hat`` (P1_hat, Q1_hat, phase), ``fig7_W_hat`` (fig7_Q1_hat, fig7_phase) and
         ``cubic_law_Q1_hat``/``cubic_law_W_hat`` (cubic_law_point).
 

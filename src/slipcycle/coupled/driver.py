@@ -1,0 +1,205 @@
+"""The steady-state driver of the discrete models: one cycle loop, with its accelerators
+behind one small interface.
+
+Plain cycling runs load cycles x_{c+1} = Φ(x_c) from the assembled state until the start
+of a cycle repeats within the tolerance (the last increment and, where the increments
+shrink geometrically, the rest of the creep:
+:func:`~slipcycle.kernels.creep.creep_distance`), the state ratchets (the increment
+repeats), or the cycles run out (J. R. Barber, J. Phys.: Conf. Ser. 382 (2012) 012002,
+§3). An :class:`Accelerator` judges each cycle run and may replace the next start by a
+step towards the limit; :class:`PlainCycling` takes none. The 2-D model's periodic
+follower and slow-mode steps (:class:`slipcycle.discrete.steady.PieceSteps`) and the 3-D
+model's Anderson mixing with replay (:class:`slipcycle.discrete3d.steady.Mixing`) are
+the others.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from slipcycle.coupled.cycles import CycleHistory, ratchet_residual
+from slipcycle.coupled.settings import RunSettings
+from slipcycle.kernels.creep import creep_distance
+
+__all__ = ["CycleState", "Accelerator", "PlainCycling", "run_cycles", "STEADY", "SKIP"]
+
+#: verdicts of :meth:`Accelerator.judge` and :meth:`Accelerator.step`: the state is
+#: steady (the loop ends), or the rest of this cycle's tests is skipped
+STEADY = "steady"
+SKIP = "skip"
+
+
+@dataclass
+class CycleState:
+    """What the loop knows after each cycle, shared with the accelerator.
+
+    Attributes
+    ----------
+    system
+        The frictional system (``K``, ``friction``, ``n_nodes``).
+    evo
+        The evolution engine (``x``, ``follow``, ``resync``).
+    settings : RunSettings
+    history : CycleHistory
+        The start-of-cycle states and the cycles' records.
+    r_w0 : (M,) array
+        Load at θ = 0 [N].
+    F : float
+        Force scale [N].
+    c : int
+        Index of the cycle just run (from 0).
+    totals
+        What the last cycle left (dissipation, slip lengths, events, ...).
+    d1 : (M,) array
+        The last increment x_c − x_{c−1} [m].
+    xscale : float
+        The residual's scale [m].
+    residual : float
+        max |d1| / xscale [1] (np.inf for a refused step).
+    increment_steady : bool
+        The last increment alone is below the tolerance (steady if the cycles run out).
+    state : str
+        ``"not_converged"``, ``"steady"`` or ``"ratcheting"``.
+    ratchet : (T,) array or None
+        The drift per cycle of a ratcheting state [m].
+    """
+
+    system: Any
+    evo: Any
+    settings: RunSettings
+    history: CycleHistory
+    r_w0: np.ndarray
+    F: float
+    c: int = -1
+    totals: Any = None
+    d1: np.ndarray | None = None
+    xscale: float = 1.0
+    residual: float = np.inf
+    increment_steady: bool = False
+    state: str = "not_converged"
+    ratchet: np.ndarray | None = None
+
+    @property
+    def starts(self) -> list:
+        """The start-of-cycle states x_0, ..., x_c [m]."""
+        return self.history.starts
+
+    @property
+    def last(self) -> bool:
+        """Whether the cycle just run is the last one allowed."""
+        return self.c + 1 >= self.settings.cycles
+
+    @property
+    def counted(self) -> bool:
+        """Whether at least ``min_cycles`` cycles have been run."""
+        return self.c + 1 >= self.settings.min_cycles
+
+    def restart(self, x: np.ndarray) -> None:
+        """Go on cycling from the state x (the start of the next cycle) [m]."""
+        self.evo.x = x.copy()
+        self.evo.resync()
+
+
+class Accelerator:
+    """The interface of the driver's strategies (all methods optional but :meth:`judge`).
+
+    The loop calls, each cycle: :meth:`before_cycle`, runs the cycle, :meth:`after_cycle`,
+    then :meth:`judge` (may end the run, :data:`STEADY`, or skip the rest, :data:`SKIP`),
+    the ratcheting test where :meth:`ratchet_test` allows it, and :meth:`step` (may end
+    the run, or replace the next start).
+    """
+
+    def before_cycle(self, run: CycleState) -> None:
+        """Set up what the next cycle must record."""
+
+    def after_cycle(self, run: CycleState) -> None:
+        """Book what the cycle just run did (counts, events)."""
+
+    def judge(self, run: CycleState) -> str | None:
+        """Judge the cycle just run: :data:`STEADY`, :data:`SKIP` or None (go on)."""
+        raise NotImplementedError
+
+    def ratchet_test(self, run: CycleState) -> bool:
+        """Whether the last three starts are successive plain cycles (the ratcheting
+        test applies)."""
+        return len(run.starts) >= 3
+
+    def step(self, run: CycleState) -> str | None:
+        """Take a step towards the limit (or not); :data:`STEADY` ends the run."""
+        return None
+
+
+class PlainCycling(Accelerator):
+    """No acceleration: steady when the increment and the rest of the creep of the plain
+    cycles since :attr:`plain_from` are below the tolerance."""
+
+    def __init__(self):
+        #: starts[plain_from:] are successive plain cycles
+        self.plain_from = 0
+
+    def judge(self, run: CycleState) -> str | None:
+        if not run.counted:
+            return SKIP
+        tol = run.settings.tol
+        run.increment_steady = run.residual <= tol
+        near = creep_distance(run.starts[self.plain_from:], run.residual, run.xscale)
+        return STEADY if near <= tol else None
+
+    def ratchet_test(self, run: CycleState) -> bool:
+        return len(run.starts) - self.plain_from >= 3
+
+
+def run_cycles(run: CycleState, theta: np.ndarray, vals: np.ndarray,
+               accelerator: Accelerator,
+               progress: Callable[[float, float], None] | None = None) -> CycleState:
+    """Cycle to the steady state.
+
+    Parameters
+    ----------
+    run : CycleState
+        The assembled run (history holding the start x_0).
+    theta, vals : arrays
+        Sample angles [rad] and loads [N] of one cycle.
+    accelerator : Accelerator
+    progress : callable, optional
+        ``progress(cycles_done, cycles)`` after each cycle.
+
+    Returns
+    -------
+    CycleState
+        With ``state`` ``"steady"`` (not yet classified), ``"ratcheting"`` or
+        ``"not_converged"``.
+    """
+    evo, history, cycles = run.evo, run.history, run.settings.cycles
+    for c in range(cycles):
+        run.c, run.increment_steady = c, False
+        accelerator.before_cycle(run)
+        run.totals = evo.follow(theta, vals, record=history.record)
+        evo.resync()
+        if progress is not None:
+            progress(c + 1, cycles)
+        history.add(evo.x, run.totals)
+        accelerator.after_cycle(run)
+        run.d1, run.xscale, run.residual = history.increment()
+        verdict = accelerator.judge(run)
+        if verdict is STEADY:
+            run.state = "steady"
+            break
+        if verdict is SKIP:
+            continue
+        if accelerator.ratchet_test(run):
+            rres = ratchet_residual(run.starts, run.d1, run.xscale, run.settings.tol)
+            if rres is not None:
+                run.ratchet = run.d1[:run.d1.size - run.system.n_nodes]
+                run.residual, run.state = rres, "ratcheting"
+                break
+        if accelerator.step(run) is STEADY:
+            run.state = "steady"
+            break
+    if run.state == "not_converged" and run.increment_steady:
+        run.state = "steady"      # the cycles ran out after the increment test
+    return run

@@ -1,0 +1,182 @@
+"""The steady-state driver shared by the discrete models (``slipcycle.coupled``): one cycle
+loop with its accelerators behind one interface, typed run settings and solver statistics,
+and the one list of steady-state words.
+
+The loop is checked on cycle maps whose fixed point, drift and creep are known in closed
+form (an affine contraction x → A x + b, a constant drift), the strategies against plain
+cycling, and the typed settings and statistics through the paths users take."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from slipcycle.coupled import RunSettings, SolverStats
+from slipcycle.coupled.cycles import CycleHistory, assemble, run_scales
+from slipcycle.coupled.driver import CycleState, PlainCycling, run_cycles
+from slipcycle.discrete import DiscreteLoad, FrictionalSystem, simulate
+from slipcycle.discrete.evolution import Evolution
+from slipcycle.discrete.steady import PieceSteps, initial_state
+from slipcycle.discrete3d.steady import Mixing
+from slipcycle.result import STEADY_STATES, SteadyState
+
+
+class _AffineCycle:
+    """A stand-in for an evolution engine whose cycle maps x to A x + b (no contact: the
+    totals say nothing slipped or opened)."""
+
+    def __init__(self, A, b, x0):
+        self.A, self.b = np.asarray(A, float), np.asarray(b, float)
+        self.x = np.asarray(x0, float).copy()
+        self.plan = None
+        self.cycles = 0
+
+    def follow(self, theta, vals, record=False):
+        self.x = self.A @ self.x + self.b
+        self.cycles += 1
+        n = self.x.size // 2
+        return SimpleNamespace(dissipation=np.zeros(n), slip_length=np.zeros(n),
+                               separated=np.zeros(n, bool), steps=1, refinements=0,
+                               unresolved=0, replay_mismatches=0, plan=None,
+                               samples={"x": self.x[None], "r": self.x[None],
+                                        "modes": np.zeros((1, n), np.int8)})
+
+    def resync(self):
+        pass
+
+
+def _run(A, b, x0, accelerator, **kw):
+    evo = _AffineCycle(A, b, x0)
+    system = SimpleNamespace(n_nodes=len(x0) // 2)
+    s = RunSettings(**kw)
+    run = CycleState(system, evo, s, CycleHistory(1.0, False, [evo.x.copy()]),
+                     np.zeros(len(x0)), 1.0)
+    return run_cycles(run, np.zeros(1), np.zeros((1, len(x0))), accelerator), evo
+
+
+@settings(max_examples=30, deadline=None)
+@given(rho=st.floats(0.05, 0.9), b=st.floats(-2.0, 2.0), tol=st.sampled_from([1e-6, 1e-9]))
+def test_plain_cycling_of_an_affine_contraction_stops_within_tol_of_its_fixed_point(
+        rho, b, tol):
+    # x → ρ x + b: fixed point b/(1 − ρ); after c cycles from 0 the distance to it is
+    # ρ^c |b|/(1 − ρ) and the increment ρ^(c−1) |b|: the creep test stops where the
+    # distance, not the increment, is below tol (relative to the scale max(1, |x|))
+    A = np.diag([rho, rho])
+    run, evo = _run(A, [b, 0.0], [0.0, 0.0], PlainCycling(), cycles=2000, tol=tol)
+    assert run.state == "steady"
+    x_star = b / (1 - rho)
+    scale = max(1.0, abs(run.starts[-1][0]))
+    assert abs(run.starts[-1][0] - x_star) <= tol * scale * (1 + 1e-6)
+    # and not much later than needed: one cycle before, plain cycling was not there yet
+    # or its increment test had not yet seen the creep
+    assert evo.cycles == len(run.starts) - 1 == len(run.history.dissipation)
+
+
+def test_a_constant_drift_is_ratcheting_with_its_drift():
+    run, _ = _run(np.eye(2), [0.25, 0.0], [0.0, 0.0], PlainCycling(), cycles=50, tol=1e-9)
+    assert run.state == "ratcheting"
+    np.testing.assert_array_equal(run.ratchet, [0.25])      # the tangential part
+    assert len(run.starts) == 3                       # two cycles: two equal increments
+
+
+def test_cycles_that_run_out_are_not_converged_unless_the_increment_was_steady():
+    A = np.diag([0.99, 0.99])
+    run, _ = _run(A, [1.0, 0.0], [0.0, 0.0], PlainCycling(), cycles=5, tol=1e-9)
+    assert run.state == "not_converged" and len(run.starts) == 6
+    # min_cycles: a fixed point from the start still runs min_cycles cycles
+    run, evo = _run(np.zeros((2, 2)), [0.0, 0.0], [0.0, 0.0], PlainCycling(), cycles=9,
+                    tol=1e-9, min_cycles=4)
+    assert run.state == "steady" and evo.cycles == 4
+
+
+@pytest.mark.parametrize("rho", [0.9, 0.99])
+def test_anderson_mixing_reaches_the_fixed_point_of_a_slow_contraction_in_fewer_cycles(rho):
+    # a linear map is where the mixing is exact (GMRES): it lands on (I − A)⁻¹ b to the
+    # tolerance in a few cycles, where plain cycling creeps
+    rng = np.random.default_rng(3)
+    Q = np.linalg.qr(rng.normal(size=(4, 4)))[0]
+    A = Q @ np.diag([rho, 0.5 * rho, 0.3, 0.1]) @ Q.T
+    b = rng.normal(size=4)
+    x_star = np.linalg.solve(np.eye(4) - A, b)
+    kw = dict(cycles=3000, tol=1e-10)
+    plain, _ = _run(A, b, np.zeros(4), PlainCycling(), **kw)
+    mixed, evo = _run(A, b, np.zeros(4), Mixing(True, 3, False, 5, 20), **kw)
+    for run in (plain, mixed):
+        assert run.state == "steady"
+        assert np.abs(run.starts[-1] - x_star).max() <= 1e-8 * np.abs(x_star).max()
+    assert evo.cycles < (len(plain.starts) - 1) / 3
+
+
+def _two_node():
+    A = np.array([[2.0, -0.5], [-0.5, 2.0]])
+    system = FrictionalSystem(A, 0.3 * np.array([[0.0, 1.0], [-1.0, 0.0]]), 1.5 * A, 0.4)
+    load = DiscreteLoad.harmonic([1.0, 1.2], [0.1, -0.05], [0.3, 0.2], [0.45, 0.4],
+                                 [0.0, 1.0], [0.5, 2.0])
+    return system, load
+
+
+def test_plain_cycling_strategy_on_the_exact_engine_is_simulate_without_steps():
+    """The driver's plain cycling, assembled from the shared pieces, is
+    ``simulate(accelerate=False)`` to the last bit; the 2-D strategy with its steps off is
+    plain cycling too."""
+    system, load = _two_node()
+    kw = dict(cycles=30, steps_per_cycle=40, tol=1e-12)
+    ref = simulate(system, load, accelerate=False, record=False, **kw)
+    theta, vals, F, disp = run_scales(system, load, 40, None)
+    for strategy in (PlainCycling(), PieceSteps(False, False)):
+        evo = assemble(lambda x0, rw: Evolution(system, x0, rw, F), system, vals[0], F, None,
+                       None, initial_state)
+        run = CycleState(system, evo, RunSettings(cycles=30, steps_per_cycle=40, tol=1e-12),
+                         CycleHistory(disp, False, [evo.x.copy()]), vals[0], F)
+        run_cycles(run, theta, vals, strategy)
+        np.testing.assert_array_equal(np.array(run.starts), ref.cycle_start_states)
+        assert run.residual == ref.residual
+
+
+def test_run_settings_have_one_name_per_setting_and_pass_on_unchanged():
+    base = RunSettings()
+    assert dict(base) == {"cycles": 40, "steps_per_cycle": 100, "tol": 1e-8, "min_cycles": 1}
+    s = RunSettings.of({"steady_tol": 1e-6, "cycles": 7}, base)
+    assert s.tol == 1e-6 and s.cycles == 7 and s["tol"] == 1e-6
+    three = RunSettings.of({"step_tolerance": 1e-5}, RunSettings(step_tol=1e-7, replay=False))
+    assert three.step_tol == 1e-5 and dict(three)["replay"] is False
+    with pytest.raises(TypeError, match="step_tol"):
+        RunSettings.of({"step_tol": 1e-5}, base)         # the 2-D engine has none
+    with pytest.raises(KeyError):
+        base["step_tol"]
+    with pytest.raises(AttributeError):
+        s.tol = 1.0                                        # frozen
+    system, load = _two_node()
+    res = simulate(system, load, record=False, **RunSettings(cycles=3, steps_per_cycle=20))
+    assert res.cycles_run <= 3
+
+
+def test_solver_stats_are_typed_counts_with_the_step_solvers_own():
+    stats = SolverStats(periodic_steps=2, jumps=1, solver={"solves": 10})
+    assert stats.periodic_steps == 2 and stats["periodic_steps"] == 2
+    assert stats["solves"] == 10 and stats.get("newton_iterations", 0) == 0
+    assert set(stats) >= {"solves", "jumps", "replay_mismatches"}
+    system, load = _two_node()
+    res = simulate(system, load, cycles=3, steps_per_cycle=20, record=False)
+    assert isinstance(res.solver_stats, SolverStats)
+    assert res.solver_stats["factorizations"] >= 1
+
+
+def test_one_list_of_steady_state_words_with_the_codes_of_the_stores():
+    # the codes the basin maps, λ scans and their figures store (unchanged)
+    assert STEADY_STATES[:6] == ("shakedown", "cyclic_slip", "ratcheting", "not_converged",
+                                 "inadmissible", "failed")
+    for word in STEADY_STATES:
+        s = SteadyState(word)
+        assert SteadyState.of_code(s.code) is s and STEADY_STATES[s.code] == word
+    assert SteadyState.worst(["shakedown", "ratcheting", "cyclic_slip"]) is \
+        SteadyState.RATCHETING
+    from slipcycle.discrete.steady import STEADY_CLASSES, STEADY_CODES
+    from slipcycle.discrete3d.steady import STEADY_CLASSES as CLASSES_3D
+    assert STEADY_CODES == STEADY_STATES
+    assert STEADY_CLASSES == CLASSES_3D == ("shakedown", "cyclic_slip", "ratcheting",
+                                            "not_converged")
