@@ -28,7 +28,13 @@ from slipcycle.discrete.wellposed import critical_friction
 from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.io.case import case_error_of
-from slipcycle.io.loads import load_cases, periodic_load, protocol_states, run_settings
+from slipcycle.io.loads import (
+    check_some_contact,
+    load_cases,
+    periodic_load,
+    protocol_states,
+    run_settings,
+)
 
 __all__ = ["run_case", "read_discrete_case", "DiscreteCase", "DiscreteResult", "discrete_case",
            "solve_case", "solve_model", "SUMMARY_UNITS", "SUMMARY_FLAGS"]
@@ -121,6 +127,12 @@ def _initial_state_error(sec: Section, ld: Section, exc, r0: np.ndarray, n: int)
                              "discrete.initial_slip imposes; make the normal load "
                              "compressive, or remove initial_slip (the node then opens "
                              "freely as the load is applied)")
+    if np.broadcast_to(np.asarray(sec.data.get("friction", 1.0), float), (n,))[j] == 0:
+        # frictionless: no tangential reaction can be held, the slip is the equilibrium one
+        return sec.error("initial_slip", f"node {j} has friction = 0, so it holds no "
+                         "tangential reaction and only the slip in equilibrium with the "
+                         "loads is admissible at θ = 0; remove initial_slip (the run then "
+                         "starts from that equilibrium)")
     return sec.error("initial_slip", f"inadmissible at θ = 0: {exc}")
 
 
@@ -196,6 +208,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     except ModelError as exc:
         raise case_error_of(exc, {**{k: sec.key(k) for k in _SYSTEM_KEYS}, **mkeys}) from None
     fc = system.critical_friction
+    check_some_contact(ld, load.cycle_samples(run.steps_per_cycle)[1][:, -n:])
     if init is not None:
         r0 = load(np.array([0.0]))[0]
         F = max(float(np.max(np.abs(load.cycle_samples(run.steps_per_cycle)[1]))), 1e-300)

@@ -29,7 +29,14 @@ from slipcycle.discrete3d.steady import (
 from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, RunOutputs, Section
 from slipcycle.io.case import case_error_of
-from slipcycle.io.loads import load_cases, periodic_load, protocol_states, run_settings
+from slipcycle.io.loads import (
+    check_some_contact,
+    load_cases,
+    periodic_load,
+    protocol_states,
+    run_settings,
+    step_tolerance,
+)
 from slipcycle.io.matrices import read_case_stiffness
 
 __all__ = ["Discrete3DCase", "DiscreteResult3D", "read_discrete3d_case", "discrete3d_case",
@@ -109,7 +116,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     coords = sec.array("coordinates", mats["coordinates"], shape=(n, 3))
     area = sec.array("area", 1.0, shape=(n,), scalar_ok=True, gt=0.0)
     init = sec.array("initial_slip", None, shape=(n, 2))
-    protocol = protocol_states(sec, n)
+    protocol = protocol_states(sec, n, 2)
     if init is not None and protocol is not None:
         raise sec.error("protocol", "give either initial_slip or an assembly protocol, "
                                     "not both")
@@ -129,8 +136,8 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     load = Load3D(p=periodic_load(ld, "p", n, lam, 2), q=periodic_load(ld, "q", n, lam, 2),
                   cases=load_cases(ld, n, lam, 2, file_case))
     rn = case.section("run", required=False)
-    run = RunSettings(**run_settings(rn, step_tol=("step_tolerance", lambda s, k: s.float(
-        k, 1e-7, gt=0.0, lt=1.0)), replay=("replay", lambda s, k: s.bool(k, False))))
+    run = RunSettings(**run_settings(rn, step_tol=("step_tolerance", step_tolerance),
+                                     replay=("replay", lambda s, k: s.bool(k, False))))
     out = case.section("output", required=False)
     fields = out.data.get("fields", list(FIELD_FORMATS))
     if isinstance(fields, str):
@@ -150,6 +157,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
         keys = {**{k: sec.key(k) for k in ("friction", "accept_ill_posed", "coordinates",
                                            "area")}, **mkeys}
         raise case_error_of(exc, keys) from None
+    check_some_contact(ld, load.cycle_samples(run.steps_per_cycle)[1][:, -n:])
     if init is not None:
         r0 = load(np.array([0.0]))[0]
         F = max(float(np.max(np.abs(load.cycle_samples(run.steps_per_cycle)[1]))), 1e-300)

@@ -124,15 +124,39 @@ class SurfaceMap:
         return h.hexdigest()
 
 
-def _to_map(topo, periodic: bool | None = None) -> SurfaceMap:
-    """A SurfaceTopography object as a :class:`SurfaceMap` in metres."""
+def _to_map(topo, periodic: bool | None = None, fill_undefined: bool = False) -> SurfaceMap:
+    """A SurfaceTopography object as a :class:`SurfaceMap` in metres.
+
+    Undefined points (masked, NaN or ±inf heights) are refused unless ``fill_undefined``,
+    which fills them by SurfaceTopography's harmonic interpolation and logs their count.
+    """
     if topo.dim != 2:
         raise InputError("topography", "needs a 2-D topography (a height map), got a line "
                          "scan")
-    if topo.unit not in (None, "m"):
-        topo = topo.to_unit("m")
-    if topo.has_undefined_data:
-        topo = topo.interpolate_undefined_data()
+    unit = topo.unit
+    try:                                  # the conversion is lazy: heights() applies it
+        if unit not in (None, "m"):
+            topo = topo.to_unit("m")
+        h = np.ma.masked_invalid(np.ma.array(topo.heights(), float, copy=True))
+    except (ValueError, KeyError) as exc:
+        raise InputError("topography", f"height unit {unit!r} is not a length unit "
+                         "SurfaceTopography converts (m, mm, µm, nm, ...): "
+                         f"{' '.join(str(exc).split())}") from None
+    undefined = int(np.ma.count_masked(h))
+    if undefined:
+        if not fill_undefined:
+            raise InputError("topography", f"{undefined} of {h.size} height points are "
+                             "undefined (NaN, ±inf or masked); repair the file, or set "
+                             "fill_undefined = true to interpolate them")
+        import logging
+
+        from SurfaceTopography import Topography
+
+        logging.getLogger("slipcycle").warning(
+            "topography: %d of %d undefined height points filled by interpolation",
+            undefined, h.size)
+        topo = Topography(h, topo.physical_sizes, periodic=topo.is_periodic,
+                          unit="m").interpolate_undefined_data()
     is_periodic = bool(topo.is_periodic if periodic is None else periodic)
     if not is_periodic:
         # a non-periodic scan: remove the tilt, then mirror it into a periodic map
@@ -141,7 +165,8 @@ def _to_map(topo, periodic: bool | None = None) -> SurfaceMap:
                       is_periodic)
 
 
-def read_surface(path: str | Path, *, key: str = "topography") -> SurfaceMap:
+def read_surface(path: str | Path, *, key: str = "topography",
+                 fill_undefined: bool = False) -> SurfaceMap:
     """Read a topography file through SurfaceTopography (any format it knows).
 
     Parameters
@@ -151,6 +176,8 @@ def read_surface(path: str | Path, *, key: str = "topography") -> SurfaceMap:
         Heights without a unit are taken as metres.
     key : str
         Case-file key blamed for problems.
+    fill_undefined : bool
+        Interpolate undefined points (refused by default, with their count).
 
     Returns
     -------
@@ -161,16 +188,32 @@ def read_surface(path: str | Path, *, key: str = "topography") -> SurfaceMap:
     InputError
         Unreadable file, a line scan, a missing optional package.
     """
+    import warnings
+
     st, _ = require_topo(key)
-    try:
-        topo = st.read_topography(str(path))
-    except Exception as exc:  # noqa: BLE001 - readers raise many kinds; one line for the user
-        raise InputError(key, f"cannot read topography {path}: {' '.join(str(exc).split())}"
-                         ) from None
-    try:
-        return _to_map(topo)
-    except InputError as exc:
-        raise InputError(key, exc.problem) from None
+    with warnings.catch_warnings():
+        # SciPy's netCDF reader warns when a memory-mapped file closes with arrays still
+        # referring to it; the heights are copied, the warning is noise for the user
+        warnings.filterwarnings("ignore", message="Cannot close a netcdf_file")
+        try:
+            topo = st.read_topography(str(path))
+        except Exception as exc:  # noqa: BLE001 - many kinds of reader error; one line
+            raise InputError(key, f"cannot read topography {path}: "
+                             f"{' '.join(str(exc).split())}") from None
+        try:
+            surface = _to_map(topo, fill_undefined=fill_undefined)
+        except InputError as exc:
+            raise InputError(key, exc.problem) from None
+        finally:
+            del topo
+            import gc
+
+            gc.collect()
+    if not surface.rms_height > 0:
+        raise InputError(key, f"{path} is perfectly flat (rms height 0 m): a flat surface "
+                         "has no rough-contact law; use profile = \"flat_punch\" for a "
+                         "flat contact")
+    return surface
 
 
 def synthetic_surface(n: int, size: float, *, hurst: float = 0.8, rms_height: float = 1e-6,
@@ -635,6 +678,7 @@ class TopographySource:
     fit_tolerance: float = 0.1
     short_cutoff: float | None = None
     long_cutoff: float | None = None
+    fill_undefined: bool = False
 
     def __post_init__(self):
         for name in ("nominal_area", "contact_modulus"):
@@ -649,12 +693,23 @@ class TopographySource:
             raise InputError("bem_loads", f"must be in [4, 400], got {self.bem_loads}")
         if not 0 < self.fit_tolerance < 1:
             raise InputError("fit_tolerance", f"must be in (0, 1), got {self.fit_tolerance}")
+        lo, hi = self.short_cutoff, self.long_cutoff
+        if lo is not None and hi is not None and not lo < hi:
+            raise InputError("short_cutoff", f"must be < long_cutoff ({hi:g} m), got {lo:g} "
+                             "m: the filter keeps wavelengths between the two and would keep "
+                             "none")
 
     def surface(self) -> SurfaceMap:
         """The filtered map on the BEM grid."""
-        s = read_surface(self.path, key="topography_file")
+        s = read_surface(self.path, key="topography_file",
+                         fill_undefined=self.fill_undefined)
         if self.short_cutoff is not None or self.long_cutoff is not None:
             s = filter_surface(s, self.short_cutoff, self.long_cutoff)
+            if not s.rms_height > 0:
+                raise InputError("short_cutoff" if self.short_cutoff is not None else
+                                 "long_cutoff", f"keeps no wavelength of {self.path.name} "
+                                 f"(wavelengths {self.short_cutoff} to {self.long_cutoff} m "
+                                 "leave a flat surface)")
         return resample(s, self.bem_grid) if self.bem_grid else s
 
     def pressures(self, p_max: float) -> np.ndarray:
@@ -686,7 +741,7 @@ class TopographySource:
 
 #: keys of ``[halfspace]`` read for ``profile = "topography"`` (besides E, nu, friction, ...)
 SOURCE_KEYS = ("topography_file", "nominal_area", "fit", "bem_grid", "bem_loads",
-               "fit_tolerance", "short_cutoff", "long_cutoff")
+               "fit_tolerance", "short_cutoff", "long_cutoff", "fill_undefined")
 
 
 def read_source(sec, contact_modulus: float) -> TopographySource:
@@ -695,7 +750,8 @@ def read_source(sec, contact_modulus: float) -> TopographySource:
     Keys: ``topography_file`` (relative to the case file), ``nominal_area`` [m²], ``fit``
     (``"table"`` default, or ``"exponential"``), ``bem_grid`` (points per side),
     ``bem_loads`` (default 24), ``fit_tolerance`` (default 0.1), ``short_cutoff`` and
-    ``long_cutoff`` [m] (wavelength filter).
+    ``long_cutoff`` [m] (wavelength filter), ``fill_undefined`` (default false: undefined
+    height points are refused with their count; true interpolates them).
 
     Raises
     ------
@@ -712,11 +768,14 @@ def read_source(sec, contact_modulus: float) -> TopographySource:
         bem_grid=opt_int("bem_grid"), bem_loads=sec.int("bem_loads", 24),
         fit_tolerance=sec.float("fit_tolerance", 0.1),
         short_cutoff=sec.float("short_cutoff", None, gt=0.0),
-        long_cutoff=sec.float("long_cutoff", None, gt=0.0))
+        long_cutoff=sec.float("long_cutoff", None, gt=0.0),
+        fill_undefined=sec.bool("fill_undefined", False))
     try:
-        return TopographySource(**settings)
+        source = TopographySource(**settings)
+        source.surface()            # the file's units, undefined points, flatness: now
     except InputError as exc:
         raise sec.error(exc.key, exc.problem) from None
+    return source
 
 
 def largest_normal_load(normal, protocol: np.ndarray, steps: int) -> float:

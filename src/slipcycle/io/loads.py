@@ -12,7 +12,12 @@ from slipcycle.loading import HarmonicLoad, TabulatedLoad
 from slipcycle.loading.nodal import LoadCase
 
 __all__ = ["time_function", "node_vector", "periodic_load", "protocol_states", "load_cases",
-           "run_settings"]
+           "run_settings", "check_some_contact", "step_tolerance"]
+
+#: smallest accepted relative step tolerance: the state is known to about 1e-16 relative,
+#: and the steps' error estimate to some 1e6 times that after the Newton solves, so a step
+#: control asked for less subdivides without end (1e-300 was a run still going at 180 s)
+MIN_STEP_TOLERANCE = 1e-10
 
 
 def _shape(name: str, n: int, components: int) -> tuple[int, ...]:
@@ -186,3 +191,44 @@ def time_function(sec: Section, lam: float) -> HarmonicLoad | TabulatedLoad:
     elif phase.shape != amp.shape:
         raise sec.error("phase", f"must be a number or a list of {amp.size} phases")
     return HarmonicLoad([mean], amp[:, None], phase[:, None], lam)
+
+
+def check_some_contact(ld: Section, p_w: np.ndarray) -> None:
+    """Refuse a normal load that leaves every node open for the whole cycle.
+
+    Parameters
+    ----------
+    ld : Section
+        The ``[loading]`` table (its key is blamed).
+    p_w : numpy.ndarray, shape (S, N)
+        Normal loads of the nodes at the cycle's samples [N]; compressive is positive.
+
+    Raises
+    ------
+    CaseError
+        When no node is ever pressed (p^w <= 0 everywhere): nothing is in contact, so
+        there is no friction and the run would report a void "shakedown".
+    """
+    p_w = np.asarray(p_w, float)
+    if p_w.size and np.all(p_w <= 0.0):
+        key = ("p_table" if ld.has("p_table") else "p0" if ld.has("p0") else "load_case")
+        raise ld.error(key, f"every node is open for the whole cycle (largest normal load "
+                            f"p^w = {float(p_w.max()):.6g} N; compressive is positive): "
+                            "nothing is in contact, so there is no friction to compute; "
+                            "press the nodes (p^w > 0 somewhere in the cycle)")
+
+
+def step_tolerance(rn: Section, key: str = "step_tolerance", default: float = 1e-7) -> float:
+    """The relative step tolerance of a ``[run]`` table, in [1e-10, 1).
+
+    Below :data:`MIN_STEP_TOLERANCE` the step control asks for a relative error under the
+    round-off of the state (about 1e-16 of it, times the growth over a step) and would
+    subdivide forever: refused with that estimate.
+    """
+    tol = rn.float(key, default, gt=0.0, lt=1.0)
+    if tol < MIN_STEP_TOLERANCE:
+        raise rn.error(key, f"must be >= {MIN_STEP_TOLERANCE:g}, got {tol:g}: the error "
+                            "estimate of a step is itself round-off (about 1e-16 of the "
+                            "state, amplified by the Newton solves) below that, so the step "
+                            "control would subdivide without end; the default is 1e-7")
+    return tol
