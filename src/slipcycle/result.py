@@ -239,7 +239,7 @@ class _Contract:
         summary = self.summary()
         ds = self.to_dataset(summary)
         return RunOutputs(summary=summary, dataset=ds, figures=self.figures(ds),
-                          flags=dict(self.flags))
+                          flags=dict(self.flags), cf_completed=True)
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)

@@ -166,6 +166,9 @@ class RunOutputs:
         "cyclic_slip", ...)``). Stores that keep such an entry as an integer (sweeps) use
         the position in this tuple as the code, with CF ``flag_values``/``flag_meanings``.
         Units of numeric entries are in ``summary["units"]`` (``"1"`` when dimensionless).
+    cf_completed : bool
+        The Dataset is already completed to the CF conventions (a result's
+        ``to_outputs``): the writer does not complete it again.
     """
 
     summary: dict
@@ -173,6 +176,7 @@ class RunOutputs:
     figures: dict[str, Callable[[], Any]] = field(default_factory=dict)
     extra_files: dict[str, Callable[[Path], None]] = field(default_factory=dict)
     flags: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    cf_completed: bool = False
 
 
 def to_jsonable(obj: Any) -> Any:
@@ -268,7 +272,8 @@ def write_outputs(out_dir: str | Path, outputs: RunOutputs, case_text: str | Non
         )
         if outputs.dataset is not None:
             write_netcdf(stage / "result.nc", outputs.dataset, meta,
-                         summary.get("units"), outputs.flags)
+                         summary.get("units"), outputs.flags,
+                         complete=not outputs.cf_completed)
         for rel, writer in outputs.extra_files.items():
             target = stage / rel
             target.parent.mkdir(parents=True, exist_ok=True)
@@ -316,17 +321,19 @@ def draw_figures(figures: Mapping[str, Callable[[], Any]], directory: Path) -> F
 
 def write_netcdf(path: Path, dataset: xr.Dataset, meta: Mapping | None = None,
                  units: Mapping[str, str] | None = None,
-                 flags: Mapping[str, tuple[str, ...]] | None = None) -> None:
+                 flags: Mapping[str, tuple[str, ...]] | None = None, *,
+                 complete: bool = True) -> None:
     """Write ``dataset`` to ``path`` as CF-1.10 netCDF with the provenance ``meta``.
 
     The Dataset is completed by :func:`slipcycle.io.metadata.cf_complete` (coordinate
     variables, ``long_name``/``units`` from the variables or the summary ``units``, flag
-    attributes, ``Conventions``); what is still missing is logged (INFO). The global
+    attributes, ``Conventions``) unless ``complete`` is False (a result's Dataset, completed
+    once by its ``to_outputs``); what is still missing is logged (INFO). The global
     attributes are :func:`slipcycle.io.metadata.netcdf_attributes` of ``meta``.
     """
     from slipcycle.io.metadata import cf_complete, cf_problems, netcdf_attributes
 
-    ds = cf_complete(dataset, units, flags)
+    ds = cf_complete(dataset, units, flags) if complete else dataset.copy()
     ds.attrs.update(netcdf_attributes(meta or provenance(None)))
     for problem in cf_problems(ds):
         log.info("result.nc: CF: %s", problem)
