@@ -73,8 +73,7 @@ SUMMARY_UNITS = {
 
 #: every word of the categorical summary entries
 SUMMARY_FLAGS = {
-    "steady_state": ("shakedown", "cyclic_slip", "ratcheting", "not_converged",
-                     "inadmissible", "failed"),
+    "steady_state": STEADY_STATES,
     "regime": ("below_lambda1", "between_lambda1_and_lambda2", "above_lambda2"),
     "extreme_method": ("constant", "exact_single_harmonic", "breakpoints",
                        "harmonic_refined", "sampled_refined"),
