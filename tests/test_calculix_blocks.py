@@ -10,7 +10,8 @@ itself, run through ``ccx`` (``*FREQUENCY, SOLVER=MATRIXSTORAGE``), and read bac
 - the contact blocks A, B, C read with :func:`~slipcycle.io.matrices.read_reduced_stiffness`
   (contact nodes named, top face clamped in the deck) and every load case (the top face or
   the grip moved, condensed by :func:`~slipcycle.fe.contact3d.condense_contact_3d` from
-  ccx's K) equal slipcycle's own reduction to 1e-10;
+  ccx's K) equal slipcycle's own reduction to 1e-10; so do A, B, C and the load cases of
+  ``slipcycle reduce``'s pipeline (:mod:`slipcycle.fe_import`, the deck and its ``.sti``);
 - a periodic run of both reductions ends in the same steady-state class with the same
   dissipation per cycle (1e-8).
 
@@ -21,6 +22,7 @@ The same comparison for a tetrahedral deck read by meshio (Abaqus ``.inp`` forma
 from __future__ import annotations
 
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -39,6 +41,7 @@ from slipcycle.fe.contact3d import (
 )
 from slipcycle.fe.hex8i import hex8i_stiffness
 from slipcycle.fe.meshfile3d import MeshSolid, read_mesh_solid, reduce_mesh_solid
+from slipcycle.fe_import import import_joint, read_import_model
 from slipcycle.io.fe_formats import abaqus
 from slipcycle.io.matrices import read_reduced_stiffness
 
@@ -153,15 +156,53 @@ def _close(a, b, what):
     assert np.abs(np.asarray(a) - np.asarray(b)).max() <= RTOL * scale, what
 
 
-def _same_reduction(red, ref, what, rtol=RTOL):
+def _same_reduction(red, ref, what, rtol=RTOL, names=None):
     for k in ("A", "B", "C"):
         _close(getattr(red, k), getattr(ref, k), f"{what}: {k}")
-    assert set(red.loads) == set(ref.loads)
-    for name in ref.loads:
+    if names is None:
+        assert set(red.loads) == set(ref.loads)
+    for name in names or ref.loads:
         scale = max(np.abs(ref.loads[name]["p"]).max(), np.abs(ref.loads[name]["q"]).max())
         for part in ("q", "p"):
             assert np.abs(red.loads[name][part] - ref.loads[name][part]).max() \
                 <= rtol * max(scale, 1e-300), f"{what}: load {name} {part}"
+
+
+def _permuted(red, pos: np.ndarray) -> SimpleNamespace:
+    """A, B, C and loads of ``red`` with its nodes taken in the order ``pos``."""
+    t = (2 * pos[:, None] + np.arange(2)).ravel()  # node-major t1, t2
+    loads = {k: {"q": v["q"][t], "p": v["p"][pos]} for k, v in red.loads.items()}
+    return SimpleNamespace(A=red.A[np.ix_(t, t)], B=red.B[np.ix_(pos, t)],
+                           C=red.C[np.ix_(pos, pos)], loads=loads)
+
+
+PIPELINE = """model = "fe_import"
+[[fe_import.body]]
+stiffness = "block.sti"
+mesh = "block.inp"
+contact = "BOTTOM"
+[[fe_import.load]]
+name = "normal"
+nodes = "TOP"
+displacement = [0, 0, -1]
+[[fe_import.load]]
+name = "tangential"
+nodes = "TOP"
+displacement = [1, 0, 0]
+[fe_import.discrete]
+friction = 0.5
+"""
+
+
+def _through_pipeline(directory: Path, own, own_nodes: np.ndarray, what: str) -> None:
+    """The free deck's export read by ``slipcycle reduce``'s pipeline (contact the node set
+    BOTTOM, the top face moved) equals slipcycle's own reduction, node for node."""
+    (directory / "model.toml").write_text(PIPELINE)
+    red = import_joint(read_import_model(directory / "model.toml")).reduced
+    pos = np.searchsorted(own_nodes, red.nodes)
+    assert np.array_equal(own_nodes[pos], red.nodes)
+    _same_reduction(red, _permuted(own, pos), f"{what} (fe_import)",
+                    names=("normal", "tangential"))
 
 
 def _periodic(red, frac, normal="normal", tangential="tangential"):
@@ -245,6 +286,7 @@ def test_ccx_block_gives_slipcycles_stiffness_reduction_and_periodic_state(eleme
     for k in ("A", "B", "C"):
         _close(getattr(red, k), getattr(own, k), f"{element}: {k} (.sti read)")
     _same_reduction(from_ccx, own, element)
+    _through_pipeline(tmp_path / "free", own, np.sort(bottom), element)
     assert order.size == bottom.size
     _agree(from_ccx, own, MESH[element][1])
 
