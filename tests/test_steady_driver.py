@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from slipcycle.coupled import RunSettings, SolverStats
 from slipcycle.coupled.cycles import CycleHistory, assemble, run_scales
-from slipcycle.coupled.driver import CycleState, PlainCycling, run_cycles
+from slipcycle.coupled.driver import BackOff, CycleState, PlainCycling, run_cycles
 from slipcycle.discrete import DiscreteLoad, FrictionalSystem, simulate
 from slipcycle.discrete.evolution import Evolution
 from slipcycle.discrete.steady import PieceSteps, initial_state
@@ -180,3 +180,39 @@ def test_one_list_of_steady_state_words_with_the_codes_of_the_stores():
     assert STEADY_CODES == STEADY_STATES
     assert STEADY_CLASSES == CLASSES_3D == ("shakedown", "cyclic_slip", "ratcheting",
                                             "not_converged")
+
+
+def _attempts(backoff, cycles, found=lambda c: False, may_wait=True):
+    """The cycles in which an accelerator with ``backoff`` attempts a step."""
+    tried = []
+    for c in range(cycles):
+        if backoff.ready:
+            tried.append(c)
+            backoff.outcome(found(c), may_wait)
+        backoff.tick()
+    return tried
+
+
+def test_back_off_waits_1_2_4_then_8_cycles_after_four_fruitless_attempts():
+    # the schedule test_discrete_steady_jump.py measures on the 41-node block: 13
+    # attempts in 60 cycles (cycles 0-4, 6, 10, 18, 26, ..., 58) instead of 60
+    assert _attempts(BackOff(4, 8), 60) == [0, 1, 2, 3, 4, 6, 10, 18, 26, 34, 42, 50, 58]
+    assert len(_attempts(BackOff(4, 1), 60)) == 60          # at most 1: every cycle
+    assert len(_attempts(BackOff(4, 8), 60, may_wait=False)) == 60
+
+
+def test_back_off_starts_again_after_a_step_and_holds_after_a_refusal():
+    # a step found in cycle 10 resets the count: four more fruitless attempts before
+    # the next wait
+    tried = _attempts(BackOff(4, 8), 30, found=lambda c: c == 10)
+    assert tried[:9] == [0, 1, 2, 3, 4, 6, 10, 11, 12]
+    assert tried[9:13] == [13, 14, 15, 17]
+    b = BackOff(4, 8)
+    b.hold(2)                       # a refused step: no attempt in the next cycle
+    assert not b.ready
+    b.tick()
+    assert not b.ready
+    b.tick()
+    assert b.ready
+    b.outcome(None)                 # an attempt that goes on in the next cycle counts as none
+    assert b.fruitless == 0 and b.ready

@@ -25,7 +25,8 @@ from slipcycle.coupled.cycles import CycleHistory, ratchet_residual
 from slipcycle.coupled.settings import RunSettings
 from slipcycle.kernels.creep import creep_distance
 
-__all__ = ["CycleState", "Accelerator", "PlainCycling", "run_cycles", "STEADY", "SKIP"]
+__all__ = ["CycleState", "Accelerator", "PlainCycling", "BackOff", "run_cycles", "STEADY",
+           "SKIP"]
 
 #: verdicts of :meth:`Accelerator.judge` and :meth:`Accelerator.step`: the state is
 #: steady (the loop ends), or the rest of this cycle's tests is skipped
@@ -151,6 +152,53 @@ class PlainCycling(Accelerator):
 
     def ratchet_test(self, run: CycleState) -> bool:
         return len(run.starts) - self.plain_from >= 3
+
+
+class BackOff:
+    """When an accelerator that keeps finding no step tries again.
+
+    An attempt costs about a cycle (it records the cycle's events and gathers its
+    Jacobian); where the piece of the cycle map changes every cycle it never finds a step.
+    After ``attempts`` fruitless attempts in a row the next one waits
+    min(2^(k − attempts), ``max_wait``) cycles (k the fruitless attempts so far): 1, 2, 4, 8,
+    8, ... A step found resets the count; a refused step holds the attempts for a while.
+
+    Parameters
+    ----------
+    attempts : int
+        Fruitless attempts in a row before waiting.
+    max_wait : int
+        Most cycles between two attempts.
+    """
+
+    def __init__(self, attempts: int, max_wait: int):
+        self.attempts, self.max_wait = attempts, max_wait
+        self.wait = 0          # cycles until the next attempt
+        self.fruitless = 0     # attempts in a row that found no step
+
+    @property
+    def ready(self) -> bool:
+        """Whether the next cycle may attempt a step."""
+        return self.wait == 0
+
+    def hold(self, cycles: int) -> None:
+        """No attempt for the next ``cycles`` - 1 cycles (after a refused step)."""
+        self.wait = cycles
+
+    def outcome(self, found: bool | None, may_wait: bool = True) -> None:
+        """Book an attempt: a step ``found`` (True), none (False), or undecided (None: the
+        attempt goes on in the next cycle). ``may_wait``: waiting is allowed."""
+        if found:
+            self.fruitless = 0
+        elif found is not None:
+            self.fruitless += 1
+            if may_wait and self.fruitless >= self.attempts:
+                self.wait = max(self.wait, min(2 ** (self.fruitless - self.attempts),
+                                               self.max_wait))
+
+    def tick(self) -> None:
+        """One cycle has passed."""
+        self.wait = max(self.wait - 1, 0)
 
 
 def run_cycles(run: CycleState, theta: np.ndarray, vals: np.ndarray,

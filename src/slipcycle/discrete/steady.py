@@ -33,7 +33,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from slipcycle.coupled.cycles import CycleHistory, assemble, run_scales
-from slipcycle.coupled.driver import SKIP, STEADY, CycleState, PlainCycling, run_cycles
+from slipcycle.coupled.driver import (
+    SKIP,
+    STEADY,
+    BackOff,
+    CycleState,
+    PlainCycling,
+    run_cycles,
+)
 from slipcycle.coupled.settings import RunSettings, SolverStats
 from slipcycle.coupled.solution import CYCLE_CLASSES, CycleSolution, last_cycle
 from slipcycle.discrete.evolution import Evolution
@@ -452,10 +459,10 @@ class PieceSteps(PlainCycling):
                       "slow_mode_steps": 0, "slow_mode_steps_rejected": 0}
         self.targets = set()           # indices into ``starts`` that are targets of a step
         self.saved = None              # what to restore if the checking cycle refuses
-        self.rejects_left, self.wait = MAX_PERIODIC_REJECTIONS, 0
+        self.rejects_left = MAX_PERIODIC_REJECTIONS
+        self.backoff = BackOff(ATTEMPTS_BEFORE_WAIT, MAX_ATTEMPT_WAIT)
         self.slow_left = MAX_SLOW_REJECTIONS if slow_modes else 0
         self.no_step = 0               # cycles in a row in which the follower found no step
-        self.fruitless = 0             # attempts in a row that found no step (back-off)
         self.moving_prev = None        # nodes the events of the last kept cycle moved
         self.inequalities = False      # record the inequalities (the last attempt asked)
         self.attempt = False
@@ -465,7 +472,7 @@ class PieceSteps(PlainCycling):
     def before_cycle(self, run: CycleState) -> None:
         # record what a step needs only in a cycle that may attempt one
         self.attempt = (self.accel and (self.rejects_left > 0 or self.slow_left > 0)
-                        and self.wait == 0)
+                        and self.backoff.ready)
         run.evo.jacobian_log = [] if self.attempt else None
         run.evo.margin_log = [] if self.attempt and self.inequalities else None
         self.inequalities = False
@@ -545,7 +552,7 @@ class PieceSteps(PlainCycling):
             self.slow_left -= 1
         else:
             self.rejects_left -= 1
-        self.wait = 1 if slow else 2
+        self.backoff.hold(1 if slow else 2)
         if run.residual <= run.settings.tol and run.counted:
             return STEADY      # the state the refused polishing step started from
         return SKIP
@@ -567,7 +574,7 @@ class PieceSteps(PlainCycling):
                 run.starts[-1] = target
                 self.targets.add(len(run.starts) - 1)
                 run.restart(target)
-        self.wait = max(self.wait - 1, 0)
+        self.backoff.tick()
         self.moving_prev = self.moving
         return None
 
@@ -590,13 +597,8 @@ class PieceSteps(PlainCycling):
         # back off where the follower keeps finding nothing (not while slow-mode
         # steps, which need every cycle's Jacobian, are on; a cycle that asks for
         # the inequalities is part of the same attempt)
-        if step is not None and step is not RECORD:
-            self.fruitless = 0
-        elif step is None:
-            self.fruitless += 1
-            if self.slow_left == 0 and self.fruitless >= ATTEMPTS_BEFORE_WAIT:
-                self.wait = max(self.wait, min(2 ** (self.fruitless - ATTEMPTS_BEFORE_WAIT),
-                                               MAX_ATTEMPT_WAIT))
+        self.backoff.outcome(None if step is RECORD else step is not None,
+                             may_wait=self.slow_left == 0)
         settled = True     # no slow mode says the state is still far from periodic
         if (target is None and jac is not None and self.slow_left > 0
                 and self.no_step >= SLOW_AFTER):
