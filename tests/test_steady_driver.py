@@ -216,3 +216,26 @@ def test_back_off_starts_again_after_a_step_and_holds_after_a_refusal():
     assert b.ready
     b.outcome(None)                 # an attempt that goes on in the next cycle counts as none
     assert b.fruitless == 0 and b.ready
+
+
+def test_slow_mode_steps_alone_reach_plain_cyclings_dissipation_on_the_41_node_block():
+    """The slow-mode strategy without the follower (its tries used up): on the 41-node
+    FE block D lands within 1e-6 of plain cycling to 1e-14 (3.1769966252792746e-07 J,
+    test_discrete_steady_jump.py), in far fewer than plain cycling's 273 cycles."""
+    from conftest import slid_block
+
+    system, load, protocol = slid_block(20)
+    theta, vals, F, disp = run_scales(system, load, 50, protocol)
+    evo = assemble(lambda x0, rw: Evolution(system, x0, rw, F), system, vals[0], F, None,
+                   protocol, initial_state)
+    run = CycleState(system, evo, RunSettings(cycles=200, steps_per_cycle=50, tol=1e-11),
+                     CycleHistory(disp, False, [evo.x.copy()]), vals[0], F)
+    steps = PieceSteps(True, True)
+    steps.follower.left = 0
+    run_cycles(run, theta, vals, steps)
+    assert run.state == "steady" and run.residual <= 1e-11
+    assert steps.stats["slow_mode_steps"] >= 1
+    assert steps.stats["slow_mode_steps"] == steps.stats["periodic_steps"]   # no follower
+    assert len(run.starts) - 1 < 100
+    D = float(run.totals.dissipation.sum())
+    assert D == pytest.approx(3.1769966252792746e-07, rel=1e-6, abs=0)

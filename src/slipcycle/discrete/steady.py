@@ -459,23 +459,20 @@ class PieceSteps(PlainCycling):
                       "slow_mode_steps": 0, "slow_mode_steps_rejected": 0}
         self.targets = set()           # indices into ``starts`` that are targets of a step
         self.saved = None              # what to restore if the checking cycle refuses
-        self.rejects_left = MAX_PERIODIC_REJECTIONS
+        self.follower = Follower()
+        self.slow = SlowModes(slow_modes)
         self.backoff = BackOff(ATTEMPTS_BEFORE_WAIT, MAX_ATTEMPT_WAIT)
-        self.slow_left = MAX_SLOW_REJECTIONS if slow_modes else 0
         self.no_step = 0               # cycles in a row in which the follower found no step
         self.moving_prev = None        # nodes the events of the last kept cycle moved
-        self.inequalities = False      # record the inequalities (the last attempt asked)
         self.attempt = False
         self.checking = self.moving = None
         self.near, self.same = np.inf, False
 
     def before_cycle(self, run: CycleState) -> None:
         # record what a step needs only in a cycle that may attempt one
-        self.attempt = (self.accel and (self.rejects_left > 0 or self.slow_left > 0)
+        self.attempt = (self.accel and (self.follower.active or self.slow.active)
                         and self.backoff.ready)
-        run.evo.jacobian_log = [] if self.attempt else None
-        run.evo.margin_log = [] if self.attempt and self.inequalities else None
-        self.inequalities = False
+        self.follower.record(run.evo, self.attempt)
 
     def after_cycle(self, run: CycleState) -> None:
         self.events.append(run.totals.events)
@@ -504,12 +501,12 @@ class PieceSteps(PlainCycling):
         # a steady state that plain cycling would accept is polished by one more step
         # (when the last two cycles allow one) to POLISH·tol, closer to the true limit
         same = self.moving_prev is not None and moving == self.moving_prev
-        polish = (self.attempt and self.rejects_left > 0 and not run.last and same
+        polish = (self.attempt and self.follower.active and not run.last and same
                   and checking is None and run.residual > POLISH * tol)
         # where slow-mode steps are on, a residual below the tolerance is not yet steady:
         # the creep's remaining distance is about residual / (1 − λ), and the next slow-mode
         # step says whether it is below the tolerance (else it takes the step)
-        polish = polish or (self.slow_left > 0 and not run.last
+        polish = polish or (self.slow.active and not run.last
                             and self.no_step >= SLOW_AFTER and self.attempt
                             and run.residual > POLISH * tol)
         if self.near <= tol and run.counted and not polish:
@@ -548,10 +545,7 @@ class PieceSteps(PlainCycling):
         self.stats["periodic_steps_rejected"] += 1
         self.stats["slow_mode_steps_rejected"] += slow
         self.stats["cycles_discarded"] += 1
-        if slow:
-            self.slow_left -= 1
-        else:
-            self.rejects_left -= 1
+        (self.slow if slow else self.follower).left -= 1
         self.backoff.hold(1 if slow else 2)
         if run.residual <= run.settings.tol and run.counted:
             return STEADY      # the state the refused polishing step started from
@@ -580,41 +574,106 @@ class PieceSteps(PlainCycling):
 
     def _target(self, run: CycleState):
         """The follower's step, else a slow-mode step: (target, predicted, settled)."""
-        evo, system, starts, d1 = run.evo, run.system, run.starts, run.d1
-        drift_tol = run.settings.tol * run.xscale
         self.stats["periodic_attempts"] += 1
         # the follower where the same nodes moved in the last two cycles (the cycle
         # map on one piece), then the slow modes where it found no step for a while
-        follow = self.same and self.rejects_left > 0
-        jac = (_cycle_piece(evo, system, d1, drift_tol)
-               if follow or (self.slow_left > 0 and self.no_step + 1 >= SLOW_AFTER) else None)
-        step = None
-        if follow and jac is not None:
-            step = _periodic_target(evo, system, jac, starts[-2], d1, run.r_w0, drift_tol)
-        self.inequalities = step is RECORD
+        follow = self.same and self.follower.active
+        jac = (_cycle_piece(run.evo, run.system, run.d1, run.settings.tol * run.xscale)
+               if follow or self.slow.wants_jacobian(self.no_step) else None)
+        step = self.follower.propose(run, jac if follow else None)
         target, predicted = (None, None) if step is None or step is RECORD else step
         self.no_step = self.no_step + 1 if target is None else 0
         # back off where the follower keeps finding nothing (not while slow-mode
         # steps, which need every cycle's Jacobian, are on; a cycle that asks for
         # the inequalities is part of the same attempt)
         self.backoff.outcome(None if step is RECORD else step is not None,
-                             may_wait=self.slow_left == 0)
+                             may_wait=not self.slow.active)
         settled = True     # no slow mode says the state is still far from periodic
-        if (target is None and jac is not None and self.slow_left > 0
-                and self.no_step >= SLOW_AFTER):
-            # the piece changes every cycle: step along the slow modes of this one where
-            # the state creeps slowly (the last increment kept SLOW_CREEP of the one
-            # before; a step from the first cycles, before that shows, extrapolates a
-            # transient and lands on another periodic state)
-            creep = len(starts) >= 3 and (
-                len(starts) - 2 in self.targets
-                or np.max(np.abs(d1)) >= SLOW_CREEP * np.max(np.abs(starts[-2] - starts[-3])))
-            if creep:
-                target, remaining = _slow_mode_target(evo, system, jac, starts[-1], d1,
-                                                      run.r_w0, drift_tol)
-                predicted = SLOW
-                settled = remaining <= drift_tol
+        if target is None and jac is not None and self.slow.due(self.no_step):
+            target, settled = self.slow.propose(run, jac, self.targets)
+            predicted = SLOW
         return target, predicted, settled
+
+
+class Follower:
+    """The periodic follower: plain cycling followed on the current piece of the
+    piecewise-affine cycle map without running its cycles (:func:`_periodic_target`).
+
+    It stops trying after :data:`MAX_PERIODIC_REJECTIONS` refused steps (:attr:`left`);
+    a cycle that found a step possible on the events and mode intervals alone asks the
+    next cycle to record the inequalities too.
+    """
+
+    def __init__(self):
+        self.left = MAX_PERIODIC_REJECTIONS    # refusals before the follower stops
+        self.inequalities = False              # the next cycle records the inequalities
+
+    @property
+    def active(self) -> bool:
+        """Whether the follower still tries."""
+        return self.left > 0
+
+    def record(self, evo: Evolution, attempt: bool) -> None:
+        """Have the next cycle record what an attempt needs."""
+        evo.jacobian_log = [] if attempt else None
+        evo.margin_log = [] if attempt and self.inequalities else None
+        self.inequalities = False
+
+    def propose(self, run: CycleState, jac: CycleJacobian | None):
+        """The step on the piece of the cycle just run (``jac``; None: no attempt):
+        ``(target, predicted)``, :data:`RECORD` or None (:func:`_periodic_target`)."""
+        step = None
+        if jac is not None:
+            step = _periodic_target(run.evo, run.system, jac, run.starts[-2], run.d1,
+                                    run.r_w0, run.settings.tol * run.xscale)
+        self.inequalities = step is RECORD
+        return step
+
+
+class SlowModes:
+    """The slow-mode steps: where the piece of the cycle map changes every cycle, a step
+    along the slow eigenvectors of the cycle's Jacobian, ending where the first node stops
+    (:func:`_slow_mode_target`), taken where the state creeps slowly (the last increment
+    kept :data:`SLOW_CREEP` of the one before) after :data:`SLOW_AFTER` cycles without a
+    step of the follower. Off after :data:`MAX_SLOW_REJECTIONS` refused steps.
+
+    Parameters
+    ----------
+    on : bool
+        Take slow-mode steps at all.
+    """
+
+    def __init__(self, on: bool):
+        self.left = MAX_SLOW_REJECTIONS if on else 0   # refusals before they stop
+
+    @property
+    def active(self) -> bool:
+        """Whether slow-mode steps are still tried."""
+        return self.left > 0
+
+    def wants_jacobian(self, no_step: int) -> bool:
+        """Whether the next attempt needs the cycle's Jacobian for a slow-mode step."""
+        return self.active and no_step + 1 >= SLOW_AFTER
+
+    def due(self, no_step: int) -> bool:
+        """Whether a slow-mode step is tried after ``no_step`` cycles without a step."""
+        return self.active and no_step >= SLOW_AFTER
+
+    def propose(self, run: CycleState, jac: CycleJacobian, targets: set):
+        """``(target, settled)``: the step (None: none) and whether the slow modes'
+        whole remaining distance is below the tolerance."""
+        starts, d1 = run.starts, run.d1
+        # a step from the first cycles, before a slow creep shows, extrapolates a
+        # transient and lands on another periodic state
+        creep = len(starts) >= 3 and (
+            len(starts) - 2 in targets
+            or np.max(np.abs(d1)) >= SLOW_CREEP * np.max(np.abs(starts[-2] - starts[-3])))
+        if not creep:
+            return None, True
+        drift_tol = run.settings.tol * run.xscale
+        target, remaining = _slow_mode_target(run.evo, run.system, jac, starts[-1], d1,
+                                              run.r_w0, drift_tol)
+        return target, remaining <= drift_tol
 
 
 def _assembled(system: FrictionalSystem, r0: np.ndarray, F: float,
