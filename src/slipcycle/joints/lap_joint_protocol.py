@@ -1,5 +1,10 @@
 """Assembly protocols of a bolted joint, with constant-force or elastic bolts.
 
+What an assembly-protocol study needs besides the engine: the reduced joint
+(:class:`JointContact`), the protocols (:class:`Step`, :class:`Protocol`, the standard
+patterns), the loads and run settings (:class:`StudySettings`) and the assembly itself
+(:func:`assemble`: the system and load of the service cycle and the bolt forces).
+
 A protocol is a sequence of steps; each step moves some load amplitudes linearly (the
 path the 3-D engine follows quasi-statically) and leaves them there:
 
