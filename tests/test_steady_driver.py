@@ -21,7 +21,7 @@ from slipcycle.coupled.driver import BackOff, CycleState, PlainCycling, run_cycl
 from slipcycle.discrete import DiscreteLoad, FrictionalSystem, simulate
 from slipcycle.discrete.evolution import Evolution
 from slipcycle.discrete.steady import PieceSteps, initial_state
-from slipcycle.discrete3d.steady import Mixing
+from slipcycle.discrete3d.steady import Mixing, Replay
 from slipcycle.result import STEADY_STATES, SteadyState
 
 
@@ -239,3 +239,37 @@ def test_slow_mode_steps_alone_reach_plain_cyclings_dissipation_on_the_41_node_b
     assert len(run.starts) - 1 < 100
     D = float(run.totals.dissipation.sum())
     assert D == pytest.approx(3.1769966252792746e-07, rel=1e-6, abs=0)
+
+
+def test_replay_freezes_checks_every_fifth_cycle_and_verifies_a_fixed_point():
+    """The replay strategy's decisions on a stand-in engine: a repeating pattern freezes
+    the cycle's subdivision; replayed cycles check their error estimates every
+    ``check``-th cycle outside the jumps; a fixed point of the replayed map is not steady
+    until one more replay with every estimate checked; a misfit refreezes, at most
+    ``most`` times, then cycles adaptively."""
+    evo = SimpleNamespace(plan=None, check_plan=None)
+    run = SimpleNamespace(evo=evo, totals=SimpleNamespace(plan="plan-1", replay_mismatches=0))
+    r = Replay(True, 5, 2)
+    r.before_cycle(evo, jumping=False)
+    assert not r.was_replay and r.checked
+    r.freeze(run, jumping=True)                  # not during the jumps
+    assert evo.plan is None
+    r.freeze(run, jumping=False)
+    assert evo.plan == "plan-1" and r.freezes == 1
+    checks = []
+    for _ in range(10):
+        r.before_cycle(evo, jumping=False)
+        checks.append(evo.check_plan)
+        r.after_cycle(run.totals)
+    assert checks == [False] * 4 + [True] + [False] * 4 + [True]
+    assert r.replayed == 10 and not r.checked
+    assert r.fixed_point() == "skip"             # a fixed point of the replayed map: verify
+    r.before_cycle(evo, jumping=True)
+    assert evo.check_plan is True and r.checked
+    assert r.fixed_point() == "steady"
+    run.totals = SimpleNamespace(plan="plan-2", replay_mismatches=3)
+    assert r.misfit(run, jumping=False) and evo.plan == "plan-2" and r.freezes == 2
+    r.before_cycle(evo, jumping=False)
+    r.after_cycle(run.totals)
+    assert r.mismatches == 3
+    assert r.misfit(run, jumping=False) and evo.plan is None      # most = 2: adaptive

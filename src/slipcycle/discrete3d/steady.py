@@ -282,8 +282,9 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     run_cycles(run, theta, vals, mix)
     history, totals = run.history, run.totals
     stats = SolverStats(solver=dict(evo.solver.stats), jumps=mix.jumps,
-                        jumps_undone=mix.undone, replayed_cycles=mix.replayed,
-                        replay_freezes=mix.freezes, replay_mismatches=mix.mismatches)
+                        jumps_undone=mix.undone, replayed_cycles=mix.replay.replayed,
+                        replay_freezes=mix.replay.freezes,
+                        replay_mismatches=mix.replay.mismatches)
     return SteadyResult3D(
         residual=run.residual, cycles_run=len(history.dissipation), theta=theta,
         force_scale=F, steps_per_cycle_taken=mix.steps, refinements_per_cycle=mix.refs,
@@ -295,7 +296,8 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
 
 class Mixing(PlainCycling):
     """The accelerator of the 3-D engine: Anderson mixing of the start-of-cycle states,
-    and the replay of a frozen subdivision of the step control (module docstring).
+    with the replay of a frozen subdivision of the step control (:class:`Replay`; module
+    docstring).
 
     Once the pattern of slipping / separated / stuck nodes repeats and the changes of the
     plain cycles shrink geometrically, the start is extrapolated to the limit
@@ -323,7 +325,7 @@ class Mixing(PlainCycling):
                  replay_max: int):
         super().__init__()
         self.accelerate, self.accel_order = accelerate, accel_order
-        self.replay, self.replay_check, self.replay_max = replay, replay_check, replay_max
+        self.replay = Replay(replay, replay_check, replay_max)
         self.steps, self.refs, self.unresolved = [], [], 0
         # ``pairs`` the (start, end) states (x_i, P(x_i)) of the cycles of the current run
         # with one pattern, ``run_jumps`` the jumps made in it, ``pattern`` that pattern;
@@ -333,30 +335,15 @@ class Mixing(PlainCycling):
         self.jumps = self.undone = 0
         self.res_prev = np.inf
         self.probation = None   # (state before the last jump, residuals since it)
-        # frozen subdivision: ``replaying`` the cycles run on evo.plan since it was frozen,
-        # ``verify`` the next cycle is the checked replay of a replayed fixed point
-        self.replaying, self.verify, self.freezes, self.replayed = 0, False, 0, 0
-        self.mismatches = 0
-        self.was_replay = self.was_verify = False
         self.pat = None
 
     def before_cycle(self, run: CycleState) -> None:
-        evo = run.evo
-        self.was_replay, self.was_verify = evo.plan is not None, self.verify
-        self.verify = False
-        if self.was_replay:
-            # the error estimates are checked in the verifying cycle, and every
-            # ``replay_check``-th cycle outside the jumps (which need one fixed map)
-            evo.check_plan = self.was_verify or (self.best is None and self.replaying % max(
-                self.replay_check, 1) == self.replay_check - 1)
+        self.replay.before_cycle(run.evo, jumping=self.best is not None)
 
     def after_cycle(self, run: CycleState) -> None:
         totals = run.totals
         self.unresolved += totals.unresolved
-        if self.was_replay:
-            self.replaying += 1
-            self.replayed += 1
-            self.mismatches += totals.replay_mismatches
+        self.replay.after_cycle(totals)
         self.steps.append(totals.steps)
         self.refs.append(totals.refinements)
 
@@ -373,16 +360,7 @@ class Mixing(PlainCycling):
         verdict = self._jumps_failed(run)
         if verdict is not None:
             return verdict
-        if (self.was_replay and run.totals.replay_mismatches
-                and (self.best is None or self.was_verify)):
-            # the frozen subdivision no longer fits the path: freeze the subdivision this
-            # cycle ended with (the misfitting steps redone adaptively), or return to
-            # adaptive cycles once ``replay_max`` subdivisions have been frozen. (During
-            # the jumps the map stays the replay of the one subdivision, whose misfitting
-            # steps are redone adaptively in each cycle.)
-            run.evo.plan = run.totals.plan if self.freezes < self.replay_max else None
-            self.replaying = 0
-            self.freezes += run.evo.plan is not None
+        if self.replay.misfit(run, jumping=self.best is not None):
             self._switch_map(run)
             return SKIP
         if not run.counted:
@@ -391,18 +369,10 @@ class Mixing(PlainCycling):
         # the last increment, and the rest of a geometric creep of this map's plain
         # cycles (not the check of a replayed fixed point; never below the increment),
         # below the tolerance
-        run.increment_steady = residual <= tol and (not self.was_replay or self.was_verify)
-        near = residual if self.was_verify else creep_distance(starts[self.plain_from:],
-                                                               residual, run.xscale)
-        if near <= tol:
-            if not self.was_replay or self.was_verify:
-                return STEADY
-            # a fixed point of the replayed map: accepted only if a replay from it with
-            # every sub-step's error estimate checked fits the subdivision and
-            # reproduces it within tol
-            self.verify = True
-            return SKIP
-        return None
+        run.increment_steady = residual <= tol and self.replay.checked
+        near = residual if self.replay.was_verify else creep_distance(
+            starts[self.plain_from:], residual, run.xscale)
+        return self.replay.fixed_point() if near <= tol else None
 
     def _jumps_failed(self, run: CycleState) -> str | None:
         """Undo the jumps where they fail (:data:`SKIP`), else None."""
@@ -463,13 +433,9 @@ class Mixing(PlainCycling):
                 [(starts[-2], starts[-1])], pat, 0, None
         else:
             self.pairs.append((starts[-2], starts[-1]))
-            if (self.replay and run.evo.plan is None and self.freezes < self.replay_max
-                    and self.best is None and not self.was_verify):
-                # the pattern repeats: freeze this cycle's subdivision (the replayed map
-                # equals the adaptive one at the states so far, which the extrapolation
-                # keeps using)
-                run.evo.plan, self.replaying = run.totals.plan, 0
-                self.freezes += 1
+            # the pattern repeats: freeze this cycle's subdivision (the replayed map equals
+            # the adaptive one at the states so far, which the extrapolation keeps using)
+            self.replay.freeze(run, jumping=self.best is not None)
         shrinking = run.residual < self.res_prev
         self.res_prev = run.residual
         # the first jump of a run is tried in the geometric regime only (the changes of its
@@ -507,3 +473,80 @@ class Mixing(PlainCycling):
             run.restart(x_star)
             starts[-1] = x_star.copy()
             self.plain_from = len(starts) - 1
+
+
+class Replay:
+    """The replay of a frozen subdivision of the step control (module docstring): the
+    cycle map of a repeating pattern is made one fixed map, and a fixed point of it is
+    accepted only once a replay with every sub-step's error estimate checked fits the
+    subdivision and reproduces it.
+
+    Parameters
+    ----------
+    on : bool
+        Freeze subdivisions at all.
+    check : int
+        Every this many replayed cycles (outside the jumps) the error estimates are
+        checked as well.
+    most : int
+        Most subdivisions frozen.
+    """
+
+    def __init__(self, on: bool, check: int, most: int):
+        self.on, self.check, self.most = on, check, most
+        self.replaying = 0       # cycles run on the plan since it was frozen
+        self.verify = False      # the next cycle is the checked replay of a fixed point
+        self.freezes = self.replayed = self.mismatches = 0
+        self.was_replay = self.was_verify = False
+
+    def before_cycle(self, evo, jumping: bool) -> None:
+        """Note whether the next cycle replays (or verifies); set its error checks (in
+        the verifying cycle, and every ``check``-th cycle outside the jumps, which need
+        one fixed map)."""
+        self.was_replay, self.was_verify = evo.plan is not None, self.verify
+        self.verify = False
+        if self.was_replay:
+            evo.check_plan = self.was_verify or (not jumping and self.replaying % max(
+                self.check, 1) == self.check - 1)
+
+    def after_cycle(self, totals) -> None:
+        """Count the replayed cycle and its sub-steps that did not fit."""
+        if self.was_replay:
+            self.replaying += 1
+            self.replayed += 1
+            self.mismatches += totals.replay_mismatches
+
+    def misfit(self, run: CycleState, jumping: bool) -> bool:
+        """Where the frozen subdivision no longer fits the path, freeze the one this cycle
+        ended with (the misfitting steps redone adaptively), or return to adaptive cycles
+        once ``most`` have been frozen; True: the cycle map changed. (During the jumps
+        the map stays the replay of the one subdivision, whose misfitting steps are redone
+        adaptively in each cycle.)"""
+        if not (self.was_replay and run.totals.replay_mismatches
+                and (not jumping or self.was_verify)):
+            return False
+        run.evo.plan = run.totals.plan if self.freezes < self.most else None
+        self.replaying = 0
+        self.freezes += run.evo.plan is not None
+        return True
+
+    @property
+    def checked(self) -> bool:
+        """Whether the cycle just run may end the run (adaptive, or the verifying
+        replay)."""
+        return not self.was_replay or self.was_verify
+
+    def fixed_point(self) -> str:
+        """At a fixed point of the cycle just run: steady if it may end the run, else
+        verify it by one more replay with every error estimate checked."""
+        if self.checked:
+            return STEADY
+        self.verify = True
+        return SKIP
+
+    def freeze(self, run: CycleState, jumping: bool) -> None:
+        """Freeze the subdivision of the cycle just run (its pattern repeats)."""
+        if (self.on and run.evo.plan is None and self.freezes < self.most and not jumping
+                and not self.was_verify):
+            run.evo.plan, self.replaying = run.totals.plan, 0
+            self.freezes += 1
