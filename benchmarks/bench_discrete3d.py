@@ -80,10 +80,71 @@ def step_cost(n: int, steps: int = 100, step_tol: float = 1e-4) -> tuple[float, 
     return wall / solves, cpu / solves
 
 
+def where_time_goes(n: int, cycles: int = 3, steps: int = 100,
+                    step_tol: float = 1e-4) -> dict:
+    """Where the time of ``cycles`` cycles of the N-node chain goes: Newton solves per
+    load sample (steps of the step control, rejected ones and event locations
+    included), Newton iterations per solve, CPU seconds per iteration and per solve,
+    factorisations per solve, steps split at a contact event."""
+    wall, cpu, res = steady_time(n, cycles=cycles, steps=steps, step_tol=step_tol)
+    st = res.solver_stats
+    samples = steps * max(res.cycles_run, 1)
+    solves, its = max(st["solves"], 1), max(st["newton_iterations"], 1)
+    return {"n": n, "cycles": res.cycles_run, "cpu_s": cpu, "wall_s": wall,
+            "solves_per_sample": solves / samples, "iterations_per_solve": its / solves,
+            "cpu_per_iteration_s": cpu / its, "cpu_per_solve_s": cpu / solves,
+            "factorisations_per_solve": st["factorisations"] / solves}
+
+
+def event_rows(seeds: range = range(30), steps: int = 100) -> list[dict]:
+    """The 2-D limit with separating and re-closing nodes (issue 32, item 1): random
+    coupled 2-node systems loaded along t1 only, the 3-D engine against the exact 2-D
+    solver, worst relative error of D and of every D_j over the systems with a
+    separating node, with the event location (the target 1e-6) and without it."""
+    from slipcycle.discrete import DiscreteLoad, FrictionalSystem, simulate
+    from slipcycle.discrete3d.evolution import Evolution3D
+    from slipcycle.discrete3d.model import embed_2d
+
+    worst = {True: 0.0, False: 0.0}
+    count = 0
+    for seed in seeds:
+        rng = np.random.default_rng(seed)
+        M = rng.normal(size=(4, 4))
+        K = M @ M.T / 4 + np.diag(rng.uniform(1.0, 2.0, 4))
+        A, B, C, f = K[:2, :2], 0.5 * K[2:, :2], K[2:, 2:], rng.uniform(0.2, 0.5, 2)
+        p0, q0 = rng.uniform(0.3, 0.8, 2), rng.normal(size=2) * 0.1
+        p1, q1 = rng.uniform(0.3, 0.9, 2), rng.uniform(0.3, 0.8, 2)
+        pph, qph = rng.uniform(0, 6, 2), rng.uniform(0, 6, 2)
+        r2 = simulate(FrictionalSystem(A, B, C, f),
+                      DiscreteLoad.harmonic(p0, q0, p1, q1, pph, qph), cycles=60,
+                      steps_per_cycle=steps, tol=1e-11)
+        if not r2.separating_nodes:
+            continue
+        count += 1
+        t1 = lambda a: np.column_stack([a, np.zeros(2)]).ravel()  # noqa: E731
+        load3 = Load3D.harmonic(p0, t1(q0), p1, t1(q1), pph, np.repeat(qph, 2))
+        for locate in (True, False):
+            Evolution3D.locate_events = locate
+            try:
+                r3 = simulate3d(embed_2d(A, B, C, f), load3, cycles=60,
+                                steps_per_cycle=steps, tol=1e-11, step_tol=1e-8)
+            finally:
+                Evolution3D.locate_events = True
+            d2 = r2.dissipation_per_cycle
+            err = max(abs(r3.dissipation_per_cycle - d2), float(np.max(np.abs(
+                r3.dissipation_per_node - r2.dissipation_per_node)))) / d2
+            worst[locate] = max(worst[locate], err)
+    return [{"name": f"discrete3d_2d_limit_separating_D_error ({count} systems)",
+             "value": worst[True], "unit": "rel", "target": 1e-6,
+             "ok": worst[True] <= 1e-6},
+            {"name": "discrete3d_2d_limit_separating_D_error_without_event_location",
+             "value": worst[False], "unit": "rel", "target": None}]
+
+
 def benchmarks() -> list[dict]:
     # small dense solves: one BLAS thread avoids contention on a shared 2-core machine
     with threadpool_limits(limits=1, user_api="blas"):
-        return _rows()
+        return event_rows() + _rows()
 
 
 def _rows() -> list[dict]:
@@ -100,6 +161,13 @@ def _rows() -> list[dict]:
     # time per cycle from the first three cycles (assembly and the transient's extra
     # refinements included: an upper bound); a measurement only, the target is the full
     # run below (60 s for at most 50 cycles)
+    for n in (500, 2000):
+        w = where_time_goes(n)
+        for key in ("solves_per_sample", "iterations_per_solve", "cpu_per_iteration_s",
+                    "factorisations_per_solve"):
+            rows.append({"name": f"discrete3d_chain_N{n}_{key}", "value": w[key],
+                         "unit": "1" if not key.startswith("cpu") else "CPU s",
+                         "target": None})
     wall, cpu, res = steady_time(2000, cycles=3)
     per_cycle = cpu / max(res.cycles_run, 1)
     rows.append({"name": "discrete3d_2000_nodes_time_per_cycle", "value": per_cycle,

@@ -38,6 +38,19 @@ around those instants, like the event location of the 2-D model; on the cone the
 per backward-Euler step is O(h²) (the direction turns): first order overall with fixed
 steps, second order with the extrapolation (measured orders in ``docs/discrete3d.md``).
 
+Events inside a step. Backward Euler keeps the end state's node modes over the whole
+step: a node that closes inside it would keep the slip of the step's start, and a node
+that stops because another one starts to slip (or closes) would lose its slip before that
+instant; when the instant lies in the first half of the step the full step and the two
+half steps agree and step doubling does not see it. So a step whose end state shows a
+node closed that was open, or open that was closed (the sign of φ_j = p_j − ρ_n w_j), or,
+in a step in which a slipping node stops, a node slipping that was stuck (the sign of
+ψ_j = |q_j − ρ_t Δv_j| − f_j φ_j), is split at the first such instant, located by a
+secant iteration on steps of a fraction of the step (:meth:`Evolution3D._locate_event`;
+exact for one tangential direction, where φ and ψ are affine between events), as the
+2-D model's event-driven solver does by construction; the node then takes its state
+from that instant.
+
 Energy bookkeeping per step (trapezoidal): D_j += −½(q_j⁰ + q_j¹)·Δv_j and
 W += ½(x⁰ + x¹)·Δr^w; with these the discrete stored energy Π = ½xᵀKx + r^wᵀx changes by
 exactly W − ΣD + Σ ½(p⁰ + p¹)Δw (the last term vanishes except in steps where a node
@@ -503,6 +516,10 @@ class PathTotals3D:
         At some step end every node slipped or was separated (memory erased).
     steps, refinements : int
         Load steps taken and intervals halved by the step control.
+    unresolved : int
+        Steps kept at the largest depth without passing the error test.
+    events : int
+        Steps split where a node closes or opens inside them.
     plan : list
         The accepted sub-steps of each load interval (module docstring, replay); it can
         be passed as :attr:`Evolution3D.plan` to solve the same subdivision again.
@@ -522,6 +539,7 @@ class PathTotals3D:
     steps: int = 0
     refinements: int = 0
     unresolved: int = 0
+    events: int = 0
     samples: dict = field(default_factory=dict)
     #: accepted sub-steps per load interval, a list per interval of
     #: (fraction start, fraction end, depth, kind, node states at the step ends)
@@ -557,6 +575,19 @@ class Evolution3D:
     extrapolate : bool
         Richardson extrapolation of smooth doubled steps (default True).
     """
+
+    #: split a step at the instant a node closes or opens inside it, or starts to slip
+    #: inside a step in which another one stops (:meth:`_locate_event`); False: backward
+    #: Euler over the whole step (a closing node keeps the slip of the step's start)
+    locate_events = True
+
+    #: an event function (:meth:`_event_values`) at a located event, relative to the force scale
+    event_tol = 1e-11
+    #: secant iterations of one event location at most
+    event_iterations = 40
+    #: an event within this fraction of a load interval from a step's end is taken
+    #: at that end (no steps shorter than this are made for events)
+    event_min = 1e-8
 
     def __init__(self, system: FrictionalSystem3D, x0: np.ndarray, r_w0: np.ndarray,
                  force_scale: float, *, step_tol: float = 1e-7, max_depth: int = 30,
@@ -675,11 +706,139 @@ class Evolution3D:
         tol = self.step_tol ** (2.0 / 3.0) if smooth else self.step_tol
         return max(err, err_d) <= tol, smooth
 
+    # -- events inside a step ---------------------------------------------------------------
+    def _event_values(self, x0: np.ndarray, x: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Event functions (2N,) [N] of the end state (x, r) of a step from ``x0``.
+
+        φ_j = p_j − ρ_n w_j (the first N): negative while node j is separated (p = 0,
+        w > 0), positive while it is closed; its zero is the instant the node closes or
+        opens. ψ_j = |q_j − ρ_t Δv_j| − f_j φ_j (the last N): negative while a closed
+        node sticks, zero at the start of a step while it slips, positive once it slipped
+        in the step; its zero, for a node stuck at the step's start, is the instant it
+        starts to slip. Both are continuous along the path and affine in the load
+        parameter while no node changes state (one tangential direction).
+        """
+        n = self.n
+        phi = r[2 * n:] - self.solver.rho_n * x[2 * n:]
+        z = (r[:2 * n] - np.repeat(self.solver.rho_t, 2) * (x[:2 * n] - x0[:2 * n]))
+        psi = np.hypot(z[0::2], z[1::2]) - self.solver.f * phi
+        return np.concatenate([phi, psi])
+
+    def _crossings(self, g0: np.ndarray, g1: np.ndarray, stops: bool) -> np.ndarray:
+        """Events (indices into the event functions) crossed between two states: a sign
+        change of φ_j (a node closes or opens) and, if ``stops``, of ψ_j from below for a
+        node closed at both ends (it starts to slip); functions within the event
+        tolerance at either end are at their event already."""
+        n, tol = self.n, self.event_tol * self.F
+        cross = (np.abs(g0) > tol) & (np.abs(g1) > tol) & ((g0 > 0) != (g1 > 0))
+        cross[n:] &= stops & (g0[:n] > tol) & (g1[:n] > tol) & (g0[n:] < 0)
+        return np.flatnonzero(cross)
+
+    @staticmethod
+    def _first(idx: np.ndarray, g0: np.ndarray, g1: np.ndarray) -> int:
+        """The event of ``idx`` crossed first on the straight line between g0 and g1."""
+        return int(idx[np.argmin(g0[idx] / (g0[idx] - g1[idx]))])
+
+    def _locate_event(self, drw: np.ndarray, full: Step, width: float = 1.0):
+        """The first instant inside a step at which a node closes or opens, or, in a step
+        in which a slipping node stops, starts to slip.
+
+        Backward Euler keeps the end state's modes over the whole step: a node that
+        closes inside it keeps the slip of the step's start, and a node that stops
+        because another one starts to slip (or closes) loses its slip before that
+        instant; step doubling does not see this when the instant lies in the first
+        half (the full step and the half steps then agree). The step ended in ``full``
+        under the load increment ``drw`` (3N,); the fraction s ∈ (0, 1) at which the
+        first event function (:meth:`_event_values`) that changed sign vanishes is found
+        by a safeguarded secant iteration on steps of fraction s from the start: the
+        function is affine on each side of the event while no other node changes state,
+        so the secant through two points on one side lands on it exactly (one tangential
+        direction), regula falsi inside the bracket otherwise. An event crossed before
+        the current estimate becomes the one followed. ``width`` is the step's fraction
+        of its load interval: an event closer than ``event_min`` × the interval to either
+        end of the step is taken at that end.
+
+        Returns
+        -------
+        (s, Step) or None
+            The fraction and the step to it (the event function within ``event_tol`` ×
+            the force scale), or None when no event is crossed strictly inside the step.
+        """
+        x0, r0 = self.x, self.r
+        stops = bool(np.any((self.modes == SLIP) & (full.modes == STICK)))
+        g0, g1 = self._event_values(x0, x0, r0), self._event_values(x0, full.x, full.r)
+        cross = self._crossings(g0, g1, stops)
+        if cross.size == 0:
+            return None
+        tol = self.event_tol * self.F
+        lo, hi, best = 0.0, 1.0, (1.0, full)
+        j = self._first(cross, g0, g1)
+        pts = {True: [(0.0, g0[j])], False: [(1.0, g1[j])]}   # start's side / other
+        for _ in range(self.event_iterations):
+            s = self._secant_guess(pts, lo, hi, tol)
+            step = self._solve(x0, r0, s * drw,
+                               (x0 + s * (full.x - x0), r0 + s * (full.r - r0)))
+            if step is None:
+                return None
+            g = self._event_values(x0, step.x, step.r)
+            early = self._crossings(g0, g, stops)
+            early = early[early != j]
+            if early.size:
+                # another event is crossed before s: follow it on [lo, s]
+                hi, best = s, (s, step)
+                j = self._first(early, g0, g)
+                pts = {True: [(0.0, g0[j])], False: [(s, g[j])]}
+                continue
+            same = (g[j] > 0) == (g0[j] > 0)
+            if same and abs(g[j]) <= tol:
+                best = (s, step)
+                break
+            pts[same].append((s, g[j]))
+            if same:
+                lo = s
+            else:
+                hi, best = s, (s, step)
+            if hi - lo <= 1e-15:
+                break
+        s, step = best
+        edge = self.event_min / width
+        return (s, step) if edge < s < 1.0 - edge else None
+
+    @staticmethod
+    def _secant_guess(pts: dict, lo: float, hi: float, tol: float) -> float:
+        """Next fraction: the secant through the last two points of one side of the
+        event (exact where the function is affine there), else regula falsi between the
+        bracket's ends, moved toward the start by half the event tolerance (so that the
+        located step ends just before the event: a node that starts to slip there has
+        not slipped yet), else the bracket's midpoint."""
+        lines = [pts[side][-2:] for side in (True, False) if len(pts[side]) >= 2]
+        lines.append([pts[True][-1], pts[False][-1]])
+        for (sa, ga), (sb, gb) in lines:
+            if gb != ga and sb != sa:
+                slope = (gb - ga) / (sb - sa)
+                s = sb - gb / slope - 0.5 * tol / abs(slope)
+                if lo < s < hi:
+                    return s
+        return 0.5 * (lo + hi)
+
     def _interval(self, rwa: np.ndarray, rwb: np.ndarray, full: Step | None, depth: int,
                   guess: tuple | None = None, fa: float = 0.0, fb: float = 1.0):
         x0, r0 = self.x, self.r
         if full is None:
             full = self._solve(x0, r0, rwb - rwa, guess)
+        event = None if full is None or not self.locate_events else self._locate_event(
+            rwb - rwa, full, fb - fa)
+        if event is not None:
+            # a node closes or opens inside: split the step at that instant, so that
+            # the node takes its state from it (not from the start of the step)
+            s, step = event
+            rws, fs = rwa + s * (rwb - rwa), fa + s * (fb - fa)
+            if self._totals is not None:
+                self._totals.events += 1
+            self._leaves.append((fa, fb, depth, "L", ()))
+            self._interval(rwa, rws, step, depth, fa=fa, fb=fs)
+            self._interval(rws, rwb, None, depth, fa=fs, fb=fb)
+            return
         if full is not None and (not self.adaptive or self._exact(full)):
             self._leaves.append((fa, fb, depth, "E", (full.modes,)))
             self._commit(full)
@@ -774,7 +933,12 @@ class Evolution3D:
 
     def _replay(self, rwa_k: np.ndarray, rwb_k: np.ndarray, leaves: list) -> None:
         """Replay the recorded sub-steps of one load interval (module docstring); a
-        sub-step that does not fit is redone adaptively from its start."""
+        sub-step that does not fit is redone adaptively from its start. An interval in
+        which a node closed or opened is solved adaptively again: the instant of the
+        event moves with the path, a recorded fraction would miss it."""
+        if any(leaf[3] == "L" for leaf in leaves):
+            self._interval(rwa_k, rwb_k, None, 0)
+            return
         d = rwb_k - rwa_k
         for fa, fb, depth, kind, modes in leaves:
             rwa = rwa_k + fa * d
