@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from test_lap_joint_study import SMALL
 from test_lap_joint_study import synthetic_joint as block_joint
 
 from slipcycle.errors import InputError
@@ -225,20 +226,9 @@ def test_turn_retighten_and_loosen_follow_the_bolt_algebra():
 
 # -- protocols in a case file ---------------------------------------------------------------
 
-CASE = """
-model = "lap_joint"
-[lap_joint]
-plate_width = 0.052
-bolt_count = 2
-bolt_diameter = 0.006
-washer_diameter = 0.016
-mesh_size = 0.008
-friction = 0.3
-bolt_modulus = 210e9
-[lap_joint.loading]
-preload = 10e3
-service_amplitude = 2e3
-[lap_joint.protocols]
+#: the small joint of tests/test_lap_joint_study.py with steel bolts and a fit-up protocol
+CASE = SMALL.split("[lap_joint.protocols]")[0].replace(
+    "friction = 0.3\n", "friction = 0.3\nbolt_modulus = 210e9\n") + """[lap_joint.protocols]
 names = ["sequential", "fit_up"]
 [lap_joint.protocols.steps]
 fit_up = [{offset = 4.4e-6}, {tighten = [0, 1], force = [9e3, 11e3]}, {release = true},
