@@ -103,7 +103,7 @@ MODELS: dict[str, ModelEntry] = {
         solver="slipcycle.joints.lap_joint_case:solve_case",
         model_solver="slipcycle.joints.lap_joint_case:solve_model",
         model_types=("slipcycle.joints.lap_joint_case:LapJointCase",),
-        result="slipcycle.joints.lap_joint_study:LapJointResult"),
+        result="slipcycle.joints.lap_joint_result:LapJointResult"),
     # an FE code's export and its mesh -> a discrete3d case (slipcycle.fe_import)
     "fe_import": ModelEntry(None, None, ("reduce",)),
 }
