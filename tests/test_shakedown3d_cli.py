@@ -87,3 +87,85 @@ def test_cli_shakedown_discrete3d_refuses_bad_options_in_one_line(argv, key, run
     assert code == 2
     assert key in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+# -- the lap joint (small, one protocol): it must be the joint ------------------------------
+
+LAP = """
+model = "lap_joint"
+[lap_joint]
+plate_width = 0.052
+bolt_count = 2
+bolt_diameter = 0.006
+washer_diameter = 0.016
+mesh_size = 0.008
+friction = 0.3
+[lap_joint.loading]
+preload = 10e3
+service_amplitude = 2e3
+[lap_joint.protocols]
+names = ["simultaneous"]
+[run]
+cycles = 20
+steps_per_cycle = 12
+steady_tol = 1e-6
+step_tolerance = 1e-4
+[output]
+fields = []
+"""
+
+
+def _lap_text() -> str:
+    return LAP
+
+
+@pytest.fixture(scope="module")
+def lap_cli(tmp_path_factory):
+    from slipcycle.cli.main import main
+
+    work = tmp_path_factory.mktemp("lapsd")
+    (work / "lap.toml").write_text(_lap_text())
+    assert main(["shakedown", str(work / "lap.toml"), "--out", str(work / "o"),
+                 "--lam-points", "2", "--lam-tol", "0.1", "-q"]) == 0
+    return json.loads((work / "o" / "summary.json").read_text())
+
+
+def test_cli_shakedown_lap_joint_lambda2_is_confirmed_by_the_engine(lap_cli):
+    """λ2 of the joint with its open nodes (the all-closed program is infeasible) equals
+    the API's, and the engine started from the program's safe state shakes down up to
+    it: its limit bracket holds λ2, while simultaneous tightening slips far below."""
+    from slipcycle.discrete3d.shakedown import lambda2_socp
+    from slipcycle.joints.lap_joint_shakedown import lap_joint_subjects
+
+    s = lap_cli
+    assert s["model"] == "lap_joint"
+    assert s["subjects"] == ["simultaneous", "safe state (simultaneous)"]
+    subjects, run = lap_joint_subjects(parse_case_text(_lap_text()))
+    sub = subjects[0]
+    region = lambda2_open(sub.system, sub.load, run["steps_per_cycle"])
+    assert region.consistent and region.open_set.any()
+    assert lambda2_socp(sub.system, sub.load, run["steps_per_cycle"]).lambda2 == 0.0
+    assert s["lambda2"][0] == pytest.approx(region.lambda2, rel=1e-6)
+    lo, hi = s["shakedown_limits"][1]
+    assert lo <= region.lambda2 <= hi
+    weak_hi = s["shakedown_limits"][0][1]
+    assert weak_hi < lo and s["class_window"] == pytest.approx([weak_hi, lo])
+
+
+@pytest.mark.parametrize("argv, key", [(["--random", "3"], "--random"),
+                                       (["--grid", "5"], "--grid")])
+def test_cli_basins_lap_joint_refuses_start_options_in_one_line(argv, key, run_cli,
+                                                                 tmp_path, write_case):
+    case = write_case(_lap_text())
+    out = tmp_path / "o"
+    code, _, err = run_cli("basins", case, "--out", out, *argv)
+    assert code == 2 and key in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_cli_shakedown_lap_joint_refuses_protocols_file(run_cli, tmp_path, write_case):
+    case = write_case(_lap_text())
+    (tmp_path / "p.toml").write_text(PROTOCOLS)
+    code, _, err = run_cli("shakedown", case, "--out", tmp_path / "o", "--protocols",
+                           tmp_path / "p.toml")
+    assert code == 2 and "--protocols" in err and len(err.strip().splitlines()) == 1

@@ -14,6 +14,11 @@ A ``model = "discrete3d"`` case (isotropic Coulomb cone, any N) takes ``--random
 (admissible initial slips, two components per node; default 16) or ``--protocols FILE``
 (``p_w`` (S, N) and ``q_w`` (S, N, 2) per protocol).
 
+A ``model = "lap_joint"`` case: the map of which assembly protocol of
+``[lap_joint.protocols]`` shakes down at which service amplitude (9 amplitudes up to
+``--lam`` [N], default 1.1 λ2), each protocol's largest shakedown amplitude bisected, and
+the window where one protocol shakes down and another slips (as ``slipcycle shakedown``).
+
 ``--lam`` overrides ``loading.lam``. Runs go through the sweep machinery (``DIR/basins.zarr``,
 ``--resume``, ``--workers``, ``--scheduler``); grid rows run in parallel threads.
 """
@@ -30,8 +35,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("basins", help="basins of attraction over initial conditions",
                        description=__doc__,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("case", type=Path, help="TOML case file (model = \"discrete\" or "
-                                              "\"discrete3d\")")
+    p.add_argument("case", type=Path, help="TOML case file (model = \"discrete\", "
+                                              "\"discrete3d\" or \"lap_joint\")")
     p.add_argument("--out", type=Path, required=True, help="output directory")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--grid", type=count_option, default=None,
@@ -50,7 +55,19 @@ def add_parser(sub) -> None:
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.io import read_case
 
-    case = read_case(args.case, models=["discrete", "discrete3d"])
+    case = read_case(args.case, models=["discrete", "discrete3d", "lap_joint"])
+    if case.model == "lap_joint":
+        from slipcycle.io import CaseError
+        from slipcycle.joints.lap_joint_shakedown import lap_joint_shakedown_study
+
+        for key in ("grid", "random", "protocols", "v1", "v2"):
+            if getattr(args, key) is not None:
+                raise CaseError(f"--{key}", "a lap_joint case maps its protocols of "
+                                            "[lap_joint.protocols] over the service "
+                                            "amplitude (--lam: the largest)")
+        status = lap_joint_shakedown_study(case, args.out, lam_max=args.lam)
+        return finish_study(status, args, case, ("subjects", "lambda2", "class_window",
+                                                 "shakedown_limits"))
     if case.model == "discrete3d":
         from slipcycle.studies.basins3d import basins3d_study
 

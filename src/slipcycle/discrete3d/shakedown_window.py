@@ -8,7 +8,10 @@ For every subject: λ2 with separation (:func:`~slipcycle.discrete3d.shakedown.
 lambda2_open`), the class reached on a grid of load factors (the map of which start shakes
 down where), and the bracket of the largest load factor at which it shakes down (the grid
 step where its class first changes, bisected by :func:`~slipcycle.discrete3d.shakedown.
-shakedown_limit`). Over the subjects: λ1 is bracketed by the weakest start, and the
+shakedown_limit`). Where the periodic load vanishes at θ = 0 (a service load F sin θ) the
+safe state of the first subject's λ2 is one more start (it shakes down up to λ2 by
+construction, so the engine's verdict on it checks λ2 independently). Over the subjects:
+λ1 is bracketed by the weakest start, and the
 *class window* is the range of load factors in which one start shakes down while another
 does not.
 
@@ -29,7 +32,7 @@ import xarray as xr
 
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import FrictionalSystem3D
-from slipcycle.discrete3d.shakedown import lambda2_open, shakedown_limit
+from slipcycle.discrete3d.shakedown import lambda2_open, safe_start, shakedown_limit
 from slipcycle.discrete3d.steady import InadmissibleInitialState3D, simulate3d
 from slipcycle.errors import SolverError
 from slipcycle.figure_task import figure_task
@@ -87,6 +90,17 @@ def _code(system, load, start, run) -> tuple[int, float]:
     return STEADY_STATES.index(res.steady_state), float(res.dissipation_per_cycle)
 
 
+def _safe_subject(s: Subject, region, steps_per_cycle: int) -> Subject | None:
+    """The safe state of ``region`` as one more start, where it is one start for every λ
+    (the periodic part vanishes at θ = 0, so the open nodes' free positions do not move
+    with λ); None otherwise or if no safe state exists."""
+    r1 = s.load.split_lam(np.zeros(1))[1]
+    if not region.feasible or np.any(r1 != 0):
+        return None
+    v = safe_start(s.system, s.load.with_lam(0.0), region, steps_per_cycle)
+    return Subject(f"safe state ({s.label})", s.system, s.load, {"initial_slip": v})
+
+
 def _limit(s: Subject, lam: np.ndarray, codes: np.ndarray, rtol: float, run) -> tuple:
     """Bracket of the largest λ at which ``s`` shakes down, from its grid classes."""
     ok = codes == 0
@@ -128,6 +142,9 @@ def shakedown_window(subjects, *, lam_max: float | None = None, lam_points: int 
     t0 = time.perf_counter()
     subjects = tuple(subjects)
     regions = [lambda2_open(s.system, s.load, steps_per_cycle) for s in subjects]
+    safe = _safe_subject(subjects[0], regions[0], steps_per_cycle)
+    if safe is not None:
+        subjects, regions = subjects + (safe,), regions + [regions[0]]
     lam2 = np.array([r.lambda2 for r in regions])
     top = float(lam_max) if lam_max is not None else 1.1 * float(np.max(lam2))
     lam = top * np.arange(1, lam_points + 1) / lam_points
