@@ -19,9 +19,12 @@ import numpy as np
 
 from slipcycle.coupled.settings import RunSettings
 from slipcycle.coupled.solution import CYCLE_CLASSES
+from slipcycle.io import Section
+from slipcycle.io.loads import protocol_states
 from slipcycle.result import STEADY_MESSAGES, STEADY_STATES, RunResult, SteadyState
 
-__all__ = ["CoupledResult", "SHARED_UNITS", "SHARED_FLAGS", "solve", "finite_or_none"]
+__all__ = ["CoupledResult", "SHARED_UNITS", "SHARED_FLAGS", "solve", "finite_or_none",
+           "read_start"]
 
 #: unit of every numeric summary entry shared by the discrete models (node indices,
 #: counts, flags and ratios: "1")
@@ -198,3 +201,16 @@ def settings_of(run: Mapping | None, defaults: RunSettings) -> RunSettings:
     """The :class:`RunSettings` of a case built in Python (``defaults`` for those not
     given); a TypeError names an unknown setting."""
     return RunSettings.of(run, defaults)
+
+
+def read_start(sec: Section, n: int, components: int = 1):
+    """How a discrete case starts: ``initial_slip`` [m] ((n,), or (n, components) with
+    more than one tangential component) or the assembly protocol
+    (:func:`~slipcycle.io.loads.protocol_states`), not both; None for one not given."""
+    shape = (n,) if components == 1 else (n, components)
+    init = sec.array("initial_slip", None, shape=shape)
+    protocol = protocol_states(sec, n, components)
+    if init is not None and protocol is not None:
+        raise sec.error("protocol", "give either initial_slip or an assembly protocol, "
+                                    "not both")
+    return init, protocol

@@ -47,6 +47,17 @@ class CoupledSystem:
         """A typical stiffness (largest diagonal entry of K) [N/m]."""
         return float(np.max(np.diag(self.K)))
 
+    def _store(self, **arrays) -> None:
+        """Set the validated arrays as read-only float fields of the frozen system, and
+        check the ``accept_ill_posed`` flag."""
+        for name, val in arrays.items():
+            val = np.array(val, dtype=float)
+            val.setflags(write=False)
+            object.__setattr__(self, name, val)
+        if not isinstance(self.accept_ill_posed, (bool, np.bool_)):
+            raise self.ERROR("accept_ill_posed", "must be True or False, got "
+                                                 f"{self.accept_ill_posed!r}")
+
     def _ill_posed_nodes(self, fc) -> str:
         """The nodes (and what else the model reports) of the critical combination."""
         return f"nodes {list(fc.nodes)}"

@@ -14,7 +14,7 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
-from slipcycle.coupled.case import SHARED_FLAGS, SHARED_UNITS, CoupledResult, solve
+from slipcycle.coupled.case import SHARED_FLAGS, SHARED_UNITS, CoupledResult, read_start, solve
 from slipcycle.coupled.settings import RunSettings
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import STATE_NAMES, FrictionalSystem, ModelError
@@ -32,7 +32,6 @@ from slipcycle.io.loads import (
     check_some_contact,
     load_cases,
     periodic_load,
-    protocol_states,
     run_settings,
 )
 
@@ -160,11 +159,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     friction = sec.array("friction", shape=(n,), scalar_ok=True)
     accept = sec.bool("accept_ill_posed", False)
     exact_max = sec.int("f_crit_exact_max_nodes", 10)
-    init = sec.array("initial_slip", None, shape=(n,))
-    protocol = protocol_states(sec, n)
-    if init is not None and protocol is not None:
-        raise sec.error("protocol", "give either initial_slip or an assembly protocol, "
-                                    "not both")
+    init, protocol = read_start(sec, n)
 
     ld = case.section("loading")
     lam = ld.float("lam", 1.0, ge=0.0)

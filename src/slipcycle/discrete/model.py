@@ -121,13 +121,7 @@ class FrictionalSystem(CoupledSystem):
         C = 0.5 * (C + C.T)
         K = coupled_stiffness(A, B, C)
         f = friction_per_node(self.friction, n)
-        for name, val in (("A", A), ("B", B), ("C", C), ("friction", f), ("K", K)):
-            val = np.array(val, dtype=float)
-            val.setflags(write=False)
-            object.__setattr__(self, name, val)
-        if not isinstance(self.accept_ill_posed, (bool, np.bool_)):
-            raise ModelError("accept_ill_posed", "must be True or False, got "
-                                                 f"{self.accept_ill_posed!r}")
+        self._store(A=A, B=B, C=C, friction=f, K=K)
         exact = self.f_crit_exact_max_nodes
         if isinstance(exact, (bool, np.bool_)) or not isinstance(exact, (int, np.integer)):
             raise ModelError("f_crit_exact_max_nodes", f"must be an integer, got {exact!r}")

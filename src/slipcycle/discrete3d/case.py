@@ -16,7 +16,7 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
-from slipcycle.coupled.case import SHARED_FLAGS, SHARED_UNITS, CoupledResult, solve
+from slipcycle.coupled.case import SHARED_FLAGS, SHARED_UNITS, CoupledResult, read_start, solve
 from slipcycle.coupled.settings import RunSettings
 from slipcycle.discrete3d.fields import write_fields
 from slipcycle.discrete3d.loads import Load3D
@@ -33,7 +33,6 @@ from slipcycle.io.loads import (
     check_some_contact,
     load_cases,
     periodic_load,
-    protocol_states,
     run_settings,
     step_tolerance,
 )
@@ -115,11 +114,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     accept = sec.bool("accept_ill_posed", False)
     coords = sec.array("coordinates", mats["coordinates"], shape=(n, 3))
     area = sec.array("area", 1.0, shape=(n,), scalar_ok=True, gt=0.0)
-    init = sec.array("initial_slip", None, shape=(n, 2))
-    protocol = protocol_states(sec, n, 2)
-    if init is not None and protocol is not None:
-        raise sec.error("protocol", "give either initial_slip or an assembly protocol, "
-                                    "not both")
+    init, protocol = read_start(sec, n, 2)
 
     ld = case.section("loading")
     lam = ld.float("lam", 1.0, ge=0.0)

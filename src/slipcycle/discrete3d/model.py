@@ -183,15 +183,8 @@ class FrictionalSystem3D(CoupledSystem):
             raise ModelError3D("area", f"must be a number or a list of {n} numbers") from None
         if not np.all(np.isfinite(area)) or np.any(area <= 0):
             raise ModelError3D("area", "must be finite and > 0")
-        for name, val in (("A", A), ("B", B), ("C", C), ("friction", f), ("K", K),
-                          ("coordinates", coords), ("normals", normals),
-                          ("tangents", tangents), ("area", area)):
-            val = np.array(val, dtype=float)
-            val.setflags(write=False)
-            object.__setattr__(self, name, val)
-        if not isinstance(self.accept_ill_posed, (bool, np.bool_)):
-            raise ModelError3D("accept_ill_posed", "must be True or False, got "
-                                                   f"{self.accept_ill_posed!r}")
+        self._store(A=A, B=B, C=C, friction=f, K=K, coordinates=coords, normals=normals,
+                    tangents=tangents, area=area)
         if not self.accept_ill_posed:
             self._check_well_posed()
 
