@@ -10,6 +10,8 @@ this package, nor the sweep engine, nor the figures (contract ``models-below-stu
   (``slipcycle basins``; the runs are :mod:`slipcycle.discrete.basins`)
 - :mod:`~slipcycle.studies.basins3d`    the same for ``model = "discrete3d"``
 - :mod:`~slipcycle.studies.shakedown`   S(λ), λ1, λ2, λ3/λ4 brackets (``slipcycle shakedown``)
+- :mod:`~slipcycle.studies.shakedown3d` λ2 with separation and the shakedown window of
+  the starts of a ``discrete3d`` case (``slipcycle shakedown``)
 - :mod:`~slipcycle.studies.w_hat_map`   the Ŵ(P̂1, Q̂1, φ) map of a half-space case
   (``slipcycle map``)
 - :mod:`~slipcycle.studies.roughness`   which wavelengths of a rough surface matter
@@ -29,6 +31,7 @@ _LAZY = {
     "basins_study": "basins", "BasinsResult": "basins",
     "basins3d_study": "basins3d", "Basins3DResult": "basins3d",
     "shakedown_study": "shakedown", "ShakedownResult": "shakedown",
+    "shakedown3d_study": "shakedown3d",
     "parse_map_case": "w_hat_map", "w_hat_map_study": "w_hat_map", "WHatMapResult": "w_hat_map",
     "parse_roughness_case": "roughness", "roughness_study": "roughness",
     "RoughnessResult": "roughness",
