@@ -165,6 +165,28 @@ def _to_map(topo, periodic: bool | None = None, fill_undefined: bool = False) ->
                       is_periodic)
 
 
+#: first bytes of the container formats a height map usually comes in
+_MAGIC = {b"CDF\x01": "netCDF", b"CDF\x02": "netCDF", b"\x89HDF": "netCDF-4/HDF5",
+          b"\x93NUMPY": "NumPy .npy"}
+
+
+def _unreadable(path: str | Path, exc: Exception) -> str:
+    """One short line for a file no SurfaceTopography reader accepted (the readers'
+    own list of failures runs to 1500 characters)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(8)
+    except OSError as err:
+        return f"cannot read topography {path}: {err.strerror or err}"
+    kind = next((v for k, v in _MAGIC.items() if head.startswith(k)), None)
+    if kind is not None:
+        first = " ".join(str(exc).split())[:160]
+        return (f"{path} starts as a {kind} file but cannot be read as a topography "
+                f"(truncated or damaged?): {first}")
+    return (f"{path} is in no format SurfaceTopography reads (netCDF, NPY, instrument "
+            "files, plain-text columns); give the height map in one of them")
+
+
 def read_surface(path: str | Path, *, key: str = "topography",
                  fill_undefined: bool = False) -> SurfaceMap:
     """Read a topography file through SurfaceTopography (any format it knows).
@@ -198,8 +220,7 @@ def read_surface(path: str | Path, *, key: str = "topography",
         try:
             topo = st.read_topography(str(path))
         except Exception as exc:  # noqa: BLE001 - many kinds of reader error; one line
-            raise InputError(key, f"cannot read topography {path}: "
-                             f"{' '.join(str(exc).split())}") from None
+            raise InputError(key, _unreadable(path, exc)) from None
         try:
             surface = _to_map(topo, fill_undefined=fill_undefined)
         except InputError as exc:
