@@ -16,7 +16,8 @@ condition is available:
    Pang 1998 for the polyhedral version of the same condition). With f_j = φ ρ_j (ρ the
    friction ratios), ``det M_I = 0`` first at φ = −1/μ for the real negative eigenvalues μ
    of ``(SᵀAS)⁻¹ F B S``; ``f_crit`` is the smallest such φ found over: every single node
-   (720 directions), every pair of nodes for N ≤ 40 (24 × 24 directions, closed form),
+   (720 directions), every pair of nodes for N ≤ 40 (24 × 24 directions, the quadratic
+   det(M0 + φ M1) solved in closed form for all pairs and directions at once),
    and the full set with 32 random direction draws for N ≤ 300. It is *sampled*: a true
    f_crit can only be smaller. With one tangential direction (directions ±t1) it is the
    2-D value of the same subsets.
@@ -97,6 +98,65 @@ def _phi_from_eig(M0, M1) -> float:
     return float(np.min(-1.0 / neg.real)) if neg.size else np.inf
 
 
+def _pairs(A, B, ratio, ang) -> tuple[float, tuple, tuple]:
+    """Smallest positive real root φ of det(M0 + φ M1) = 0 over every pair of nodes and
+    every pair of slip angles ``ang`` (k,): the 2 × 2 determinant is the quadratic
+    a φ² + b φ + c, solved in closed form for all pairs and angles at once.
+
+    Returns
+    -------
+    (phi, (i, k), (angle_i, angle_k)) : the first smallest root in the order pair (i < k),
+    angle of i, angle of k (``inf`` and empty tuples if no positive real root).
+    """
+    n = B.shape[0]
+    i, k = np.triu_indices(n, 1)                                    # (P,)
+    s = np.column_stack([np.cos(ang), np.sin(ang)])                  # (k, 2)
+    blk = A.reshape(n, 2, n, 2)
+    Bn = B.reshape(n, n, 2)
+
+    # M0 = [[s1ᵀA_ii s1, s1ᵀA_ik s2], [s2ᵀA_ki s1, s2ᵀA_kk s2]], shapes (P, k1, k2)
+    a_ii = np.einsum("xa,pab,xb->px", s, blk[i, :, i, :], s)[:, :, None]
+    a_kk = np.einsum("ya,pab,yb->py", s, blk[k, :, k, :], s)[:, None, :]
+    a_ik = np.einsum("xa,pab,yb->pxy", s, blk[i, :, k, :], s)
+    a_ki = np.einsum("ya,pab,xb->pxy", s, blk[k, :, i, :], s)
+    # M1 = [[ρ_i b_ii·s1, ρ_i b_ik·s2], [ρ_k b_ki·s1, ρ_k b_kk·s2]]
+    b_ii = (ratio[i, None] * (Bn[i, i] @ s.T))[:, :, None]
+    b_ik = (ratio[i, None] * (Bn[i, k] @ s.T))[:, None, :]
+    b_ki = (ratio[k, None] * (Bn[k, i] @ s.T))[:, :, None]
+    b_kk = (ratio[k, None] * (Bn[k, k] @ s.T))[:, None, :]
+    qa = b_ii * b_kk - b_ik * b_ki
+    qc = a_ii * a_kk - a_ik * a_ki
+    qb = a_ii * b_kk + b_ii * a_kk - a_ik * b_ki - b_ik * a_ki
+    qa, qb, qc = np.broadcast_arrays(qa, qb, qc)
+    phi = _smallest_positive_root(qa, qb, qc)
+    j = int(np.argmin(phi))
+    if not np.isfinite(phi.flat[j]):
+        return np.inf, (), ()
+    p, x, y = np.unravel_index(j, phi.shape)
+    return float(phi.flat[j]), (int(i[p]), int(k[p])), (float(ang[x]), float(ang[y]))
+
+
+def _smallest_positive_root(qa, qb, qc) -> np.ndarray:
+    """Smallest positive real root of a φ² + b φ + c elementwise (``inf`` if none); a root
+    with an imaginary part below 1e-12 (1 + |root|) counts as real (``numpy.roots``' test
+    of the loop this replaces); a = 0 leaves the linear root, a = b = 0 none."""
+    out = np.full(qa.shape, np.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        quad = qa != 0
+        disc = qb * qb - 4 * qa * qc
+        re = -qb / (2 * qa)
+        half = np.sqrt(np.abs(disc)) / (2 * np.abs(qa))
+        for sign in (1.0, -1.0):
+            r = np.where(disc >= 0, re + sign * half, re)
+            im = np.where(disc >= 0, 0.0, half)
+            ok = quad & (im < 1e-12 * (1 + np.hypot(r, im))) & (r > 0)
+            out = np.where(ok, np.minimum(out, r), out)
+        lin = ~quad & (qb != 0)
+        r = -qc / qb
+        out = np.where(lin & (r > 0), np.minimum(out, r), out)
+    return out
+
+
 def critical_friction_3d(A, B, C, friction, *, seed: int = 0) -> CriticalFriction3D:
     """Sampled critical friction and certified lower bound (module docstring).
 
@@ -139,29 +199,10 @@ def critical_friction_3d(A, B, C, friction, *, seed: int = 0) -> CriticalFrictio
             best, where, dirs = float(phi[j, a]), (int(j),), (float(ang[a]),)
         parts.append("single nodes")
         if 2 <= n <= 40:
-            ang2 = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
-            for i in range(n):
-                for k in range(i + 1, n):
-                    for a1 in ang2:
-                        M0s, M1s = [], []
-                        for a2 in ang2:
-                            M0, M1 = radial_matrix(A, B, ratio, [i, k], [a1, a2])
-                            M0s.append(M0)
-                            M1s.append(M1)
-                        M0s, M1s = np.array(M0s), np.array(M1s)
-                        # det(M0 + φ M1) = a φ² + b φ + c
-                        qa = M1s[:, 0, 0] * M1s[:, 1, 1] - M1s[:, 0, 1] * M1s[:, 1, 0]
-                        qc = M0s[:, 0, 0] * M0s[:, 1, 1] - M0s[:, 0, 1] * M0s[:, 1, 0]
-                        qb = (M0s[:, 0, 0] * M1s[:, 1, 1] + M1s[:, 0, 0] * M0s[:, 1, 1]
-                              - M0s[:, 0, 1] * M1s[:, 1, 0] - M1s[:, 0, 1] * M0s[:, 1, 0])
-                        for t in range(len(ang2)):
-                            roots = np.roots([qa[t], qb[t], qc[t]]) if abs(qa[t]) > 0 or \
-                                abs(qb[t]) > 0 else np.zeros(0)
-                            roots = roots[(np.abs(roots.imag) < 1e-12 * (1 + np.abs(roots)))
-                                          & (roots.real > 0)].real
-                            if roots.size and roots.min() < best:
-                                best = float(roots.min())
-                                where, dirs = (i, k), (float(a1), float(ang2[t]))
+            phi, pair, d = _pairs(A, B, ratio, np.linspace(0.0, 2 * np.pi, 24,
+                                                           endpoint=False))
+            if phi < best:
+                best, where, dirs = phi, pair, d
             parts.append("pairs")
         if 2 < n <= 300:
             rng = np.random.default_rng(seed)
