@@ -71,7 +71,7 @@ from slipcycle.loading.nodal import force_scale
 
 __all__ = ["JointContact", "Step", "Protocol", "StudySettings", "STANDARD_PROTOCOLS",
            "STEP_ACTIONS",
-           "standard_protocol", "protocol_states", "Assembly", "assemble"]
+           "standard_protocol", "protocol_states", "Assembly", "assemble", "locked_system"]
 
 #: the standard tightening patterns of a row of K bolts (:func:`standard_protocol`)
 STANDARD_PROTOCOLS = ("sequential", "star", "reversed", "simultaneous")
@@ -679,6 +679,23 @@ def _system(contact: JointContact, K: np.ndarray, friction: float,
                               coordinates=red.coordinates, normals=red.normals,
                               tangents=red.tangents, area=contact.node_area,
                               accept_ill_posed=accept_ill_posed)
+
+
+def locked_system(contact: JointContact, friction: float,
+                  accept_ill_posed: bool = False) -> FrictionalSystem3D:
+    """The frictional system with every bolt locked (elastic bolts; K itself for
+    constant-force bolts): the service system of every protocol that ends with all bolts
+    tightened, checked well posed once (the sampled critical friction coefficient, unless
+    ``accept_ill_posed``).
+
+    Raises
+    ------
+    ModelError
+        f reaches the critical friction coefficient of the joint with its bolts.
+    """
+    alg = _Algebra.of(contact)
+    locked = np.full(contact.bolt_count, contact.elastic)
+    return _system(contact, alg.stiffness(locked), friction, accept_ill_posed)
 
 
 def assemble(contact: JointContact, protocol: Protocol, preload: float, friction: float,

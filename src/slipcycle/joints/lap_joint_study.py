@@ -42,6 +42,7 @@ from slipcycle.joints.lap_joint_protocol import (
     Step,
     StudySettings,
     assemble,
+    locked_system,
     protocol_states,
     standard_protocol,
 )
@@ -169,8 +170,10 @@ def run_protocol(contact: JointContact, protocol: Protocol, settings: StudySetti
     fields : tuple of str
         Field formats of the run (written by the study's ``to_outputs``).
     system : FrictionalSystem3D, optional
-        :func:`joint_system` of ``contact``, when already built (constant-force bolts:
-        its well-posedness check is then not repeated).
+        :func:`joint_system` (constant-force bolts) or
+        :func:`~slipcycle.joints.lap_joint_protocol.locked_system` (elastic bolts) of
+        ``contact``, already checked well posed: the check is not repeated (elastic
+        bolts: where the protocol ends with every bolt locked, the same stiffness).
 
     Returns
     -------
@@ -182,7 +185,10 @@ def run_protocol(contact: JointContact, protocol: Protocol, settings: StudySetti
     asm = assemble(contact, protocol, settings.preload, settings.friction,
                    step_tol=float(run["step_tol"]))
     if contact.elastic:
-        system = asm.system(contact, settings.friction, settings.accept_ill_posed)
+        # every bolt locked at the end: the stiffness of locked_system (the same
+        # computation), checked once per mesh; otherwise this protocol's own check
+        if system is None or not asm.bolts.locked.all():
+            system = asm.system(contact, settings.friction, settings.accept_ill_posed)
     elif system is None:
         system = joint_system(contact, settings)
     res = solve_model(system, asm.load(settings.service_amplitude), run,
@@ -248,7 +254,8 @@ def lap_joint_study(contacts: JointContact | Sequence[JointContact],
     with single_threaded_blas():   # small dense solves: threads only spin (kernels.threads)
         for m, contact in enumerate(contacts):
             last = m == len(contacts) - 1
-            system = None if contact.elastic else joint_system(contact, settings)
+            system = (locked_system(contact, settings.friction, settings.accept_ill_posed)
+                      if contact.elastic else joint_system(contact, settings))
             for j, protocol in enumerate(protocols):
                 run = run_protocol(contact, protocol, settings, fields if last else (),
                                    system)
