@@ -303,7 +303,7 @@ class LapJointResult(RunResult):
         """Per protocol: class, dissipation (total, per bolt region, per node), node
         classes and slip of the steady cycle; per mesh: the dissipation of each protocol."""
         c = self.contact
-        n, k = c.n_nodes, c.bolt_count
+        n = c.n_nodes
         P = len(self.protocols)
         hist_len = max(len(r.solution.dissipation_history) for r in self.runs)
         hist = np.full((P, hist_len), np.nan)
@@ -323,7 +323,6 @@ class LapJointResult(RunResult):
         def var(dims, data, units, long_name, **extra):
             return (dims, data, {"units": units, "long_name": long_name, **extra})
 
-        coords = c.reduced.coordinates
         ds = xr.Dataset(
             {
                 "steady_state": var(("protocol",), codes, "1", "steady-state class",
@@ -340,12 +339,7 @@ class LapJointResult(RunResult):
                                               "dissipation per cycle in each bolt region"),
                 "stuck_area": var(("protocol",), self.stuck_area, "m2",
                                   "permanently stuck area"),
-                "bolt_force": var(("protocol", "bolt"), self.bolt_force, "N",
-                                  "bolt force after the assembly"),
-                "bolt_force_min": var(("protocol", "bolt"), self.bolt_force_range[0], "N",
-                                      "least bolt force over the steady cycle"),
-                "bolt_force_max": var(("protocol", "bolt"), self.bolt_force_range[1], "N",
-                                      "largest bolt force over the steady cycle"),
+                **self._bolt_variables(),
                 "cycles_run": var(("protocol",), [r.cycles_run for r in self.runs], "1",
                                   "load cycles run after the assembly"),
                 "dissipation_history": var(("protocol", "cycle"), hist, "J",
@@ -376,31 +370,51 @@ class LapJointResult(RunResult):
                 "mesh_dissipation": var(("mesh", "protocol"), self.mesh.dissipation, "J",
                                         "steady dissipation per cycle on each mesh"),
             },
-            coords={
-                "protocol": ("protocol", [p.name for p in self.protocols],
-                             {"units": "1", "long_name": "assembly protocol"}),
-                "order": ("protocol", [p.label for p in self.protocols],
-                          {"units": "1", "long_name": "tightening order"}),
-                "bolt": ("bolt", np.arange(k), {"units": "1", "long_name": "bolt (from 0)"}),
-                "node": ("node", np.arange(n), {"units": "1", "long_name": "node (from 0)"}),
-                "component": ("component", ["t1", "t2"],
-                              {"units": "1", "long_name": "tangent direction"}),
-                "cycle": ("cycle", np.arange(1, hist_len + 1),
-                          {"units": "1", "long_name": "cycle"}),
-                "mesh": ("mesh", np.arange(len(self.mesh.spacing)),
-                         {"units": "1", "long_name": "mesh (coarse to fine)"}),
-                "mesh_spacing": ("mesh", np.array(self.mesh.spacing),
-                                 {"units": "m", "long_name": "node spacing h"}),
-                "x": ("node", coords[:, 0], {"units": "m", "long_name": "node coordinate x"}),
-                "y": ("node", coords[:, 1], {"units": "m", "long_name": "node coordinate y"}),
-                "z": ("node", coords[:, 2], {"units": "m", "long_name": "node coordinate z"}),
-            },
+            coords=self._coordinates(),
         )
         ds.attrs["preload_N"] = float(self.settings.preload)
         ds.attrs["service_amplitude_N"] = float(self.settings.service_amplitude)
         ds.attrs["friction"] = float(self.settings.friction)
         ds.attrs["bolt_stiffness_N_per_m"] = float(c.bolt_stiffness)
         return ds
+
+    def _bolt_variables(self) -> dict:
+        """The bolt forces of the Dataset: after the assembly and their range over the
+        steady cycle (protocol × bolt) [N]."""
+        lo, hi = self.bolt_force_range
+        dims = ("protocol", "bolt")
+        return {"bolt_force": (dims, self.bolt_force, {
+                    "units": "N", "long_name": "bolt force after the assembly"}),
+                "bolt_force_min": (dims, lo, {
+                    "units": "N", "long_name": "least bolt force over the steady cycle"}),
+                "bolt_force_max": (dims, hi, {
+                    "units": "N", "long_name": "largest bolt force over the steady cycle"})}
+
+    def _coordinates(self) -> dict:
+        """The coordinates of the Dataset (protocols, bolts, nodes, meshes, cycles)."""
+        c = self.contact
+        n, k = c.n_nodes, c.bolt_count
+        coords = c.reduced.coordinates
+        hist_len = max(len(r.solution.dissipation_history) for r in self.runs)
+        return {
+            "protocol": ("protocol", [p.name for p in self.protocols],
+                         {"units": "1", "long_name": "assembly protocol"}),
+            "order": ("protocol", [p.label for p in self.protocols],
+                      {"units": "1", "long_name": "tightening order"}),
+            "bolt": ("bolt", np.arange(k), {"units": "1", "long_name": "bolt (from 0)"}),
+            "node": ("node", np.arange(n), {"units": "1", "long_name": "node (from 0)"}),
+            "component": ("component", ["t1", "t2"],
+                          {"units": "1", "long_name": "tangent direction"}),
+            "cycle": ("cycle", np.arange(1, hist_len + 1),
+                      {"units": "1", "long_name": "cycle"}),
+            "mesh": ("mesh", np.arange(len(self.mesh.spacing)),
+                     {"units": "1", "long_name": "mesh (coarse to fine)"}),
+            "mesh_spacing": ("mesh", np.array(self.mesh.spacing),
+                             {"units": "m", "long_name": "node spacing h"}),
+            "x": ("node", coords[:, 0], {"units": "m", "long_name": "node coordinate x"}),
+            "y": ("node", coords[:, 1], {"units": "m", "long_name": "node coordinate y"}),
+            "z": ("node", coords[:, 2], {"units": "m", "long_name": "node coordinate z"}),
+        }
 
     def figures(self, dataset: xr.Dataset | None = None) -> dict[str, Any]:
         """``dissipation_by_protocol`` (with mesh error bars), ``slip_maps``,
