@@ -36,6 +36,10 @@ def execute(args: argparse.Namespace) -> int:
     remove_stale_partials(out)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-{os.getpid()}-",
                                   dir=out.parent))
+    # mkdtemp makes the folder 0700; the report it becomes gets the user's umask
+    umask = os.umask(0)
+    os.umask(umask)
+    stage.chmod(0o777 & ~umask)
     try:
         # read at call time: tests may narrow the module's DEMO_CASES
         from slipcycle.demo import write_report

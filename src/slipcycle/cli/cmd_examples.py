@@ -1,6 +1,7 @@
 """``slipcycle examples [--copy DIR]``: the example cases shipped with slipcycle.
 
-Without options, lists every shipped case file with its first comment line; ``--copy DIR``
+Without options, lists every shipped case file with the command that runs it (``run``,
+``map`` or ``reduce``) and the first sentence of its comment; ``--copy DIR``
 copies them (or only the ``NAME``s given) into DIR to edit and run, e.g.
 ``slipcycle examples --copy cases && slipcycle run cases/halfspace_sphere.toml --out r``.
 ``--path NAME`` prints where the installed file of one example is.
@@ -29,7 +30,13 @@ def add_parser(sub) -> None:
 
 def execute(args: argparse.Namespace) -> int:
     from slipcycle.errors import InputError as CaseError
-    from slipcycle.examples import copy_examples, example_path, example_summary, list_examples
+    from slipcycle.examples import (
+        copy_examples,
+        example_command,
+        example_path,
+        example_summary,
+        list_examples,
+    )
 
     names = [n.removesuffix(".toml") for n in args.names]
     unknown = [n for n in names if n not in list_examples()]
@@ -53,5 +60,9 @@ def execute(args: argparse.Namespace) -> int:
     if not args.quiet:
         width = max(len(n) for n in list_examples())
         for name in names or list_examples():
-            print(f"{name:<{width}}  {example_summary(name)}")
+            command = example_command(name)[0]
+            print(f"{name:<{width}}  {command:<7} {example_summary(name)}")
+        print("\nCOMMAND runs a copy: slipcycle examples --copy DIR NAME; cd DIR; "
+              "slipcycle COMMAND NAME.toml --out OUT (OUT an .npz file for reduce of a "
+              "2-D FE model)")
     return 0

@@ -16,11 +16,13 @@ library.
 
 from __future__ import annotations
 
+import re
 import shutil
 from importlib import resources
 from pathlib import Path
 
 __all__ = ["list_examples", "example_path", "example_text", "example_summary",
+           "example_command",
            "copy_examples"]
 
 
@@ -73,14 +75,47 @@ def example_text(name: str) -> str:
     return example_path(name).read_text(encoding="utf-8")
 
 
+#: the end of a sentence: . ? or ! before a space or the end, not after an abbreviation
+_SENTENCE_END = re.compile(r"(?<!\bFig)(?<!\be\.g)(?<!\bi\.e)(?<!\bal)(?<!\bEq)[.?!](?=\s|$)")
+
+
 def example_summary(name: str) -> str:
-    """The first comment line of example ``name`` (what the case is), without ``#``."""
+    """The first sentence of the opening comment of example ``name`` (what the case is),
+    joined across comment lines, without ``#``; never cut mid-sentence."""
+    words: list[str] = []
     for line in example_text(name).splitlines():
-        if line.startswith("#"):
-            return line.lstrip("#").strip()
-        if line.strip():
-            break
-    return ""
+        if not line.startswith("#"):
+            if line.strip() or words:
+                break
+            continue
+        line = line.lstrip("#").strip()
+        if words and words[-1][-1:] not in ",;:-(" and line[:1].isupper():
+            break                   # the first line was a title without a full stop
+        words.append(line)
+        end = _SENTENCE_END.search(" ".join(words))
+        if end:
+            return " ".join(words)[:end.start() + 1]
+    return " ".join(words)
+
+
+def example_command(name: str) -> list[str]:
+    """The command line that runs example ``name`` from a folder holding its copy.
+
+    ``run`` for every model it solves; ``map`` for a case with a ``[map]`` table;
+    ``reduce`` for a finite-element model without ``[fe.discrete]`` (it reduces to an
+    ``.npz``) and for a model file of an FE export (to a folder).
+    """
+    import tomllib
+
+    data = tomllib.loads(example_text(name))
+    model = data.get("model")
+    if model == "fe_import":
+        return ["reduce", f"{name}.toml", "--out", f"{name}_reduced"]
+    if model == "fe" and "discrete" not in data.get("fe", {}):
+        return ["reduce", f"{name}.toml", "--out", f"{name}.npz"]
+    if "map" in data:
+        return ["map", f"{name}.toml", "--out", f"{name}_results"]
+    return ["run", f"{name}.toml", "--out", f"{name}_results"]
 
 
 def copy_examples(target: str | Path, names: list[str] | None = None, *,
