@@ -182,3 +182,27 @@ def test_run_prints_a_short_summary_without_per_node_lists(run_cli, write_case, 
     assert " J" in out and "dissipation" in out
     assert str(tmp_path / "o") in out
     assert "[" not in out and "dissipation_per_node" not in out
+
+
+def test_round_off_dissipation_is_printed_as_zero_and_kept_raw_in_result_nc(run_cli,
+                                                                            tmp_path):
+    """The triangle example's shakedown dissipates 2.7e-17 J (round-off, |D| below
+    64 ε F x N = 4.1e-14 J): printed as 0; result.nc keeps the raw per-node values."""
+    import xarray as xr
+
+    from slipcycle.examples import example_path
+
+    code, out, err = run_cli("run", example_path("discrete_triangle_protocol"), "--out",
+                             tmp_path / "o")
+    assert code == 0, err
+    assert "dissipation per cycle D = 0 J" in out
+    with xr.open_dataset(tmp_path / "o" / "result.nc") as ds:
+        per_node = ds["dissipation_per_node"]
+        raw = float((per_node.isel(cycle=-1) if "cycle" in per_node.dims else per_node).sum())
+    assert raw != 0.0 and abs(raw) < 4e-14
+
+
+def test_a_resolved_dissipation_is_printed_as_it_is(run_cli, write_case, tmp_path):
+    code, out, _ = run_cli("run", write_case(TWO_NODE), "--out", tmp_path / "o")
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert code == 0 and f"D = {summary['dissipation_per_cycle']:.6g} J" in out

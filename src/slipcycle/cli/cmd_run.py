@@ -13,7 +13,13 @@ import argparse
 import logging
 from pathlib import Path
 
-from slipcycle.cli.common import StageBar, Timer, print_run_summary, progress_enabled
+from slipcycle.cli.common import (
+    StageBar,
+    Timer,
+    dissipation_resolution,
+    print_run_summary,
+    progress_enabled,
+)
 
 log = logging.getLogger("slipcycle")
 
@@ -49,5 +55,5 @@ def execute(args: argparse.Namespace) -> int:
         if worker is not None:
             worker.close()
     log.info("results written in %s", clock)
-    print_run_summary(args, outputs.summary)
+    print_run_summary(args, outputs.summary, dissipation_resolution(result))
     return 0
