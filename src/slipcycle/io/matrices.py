@@ -37,7 +37,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.io import mminfo, mmread
+import scipy.sparse as sp
+from scipy.io import mminfo
 
 from slipcycle.io.case import CaseError, Section
 from slipcycle.io.fe_formats import FORMATS, detect_format, read_raw
@@ -279,7 +280,7 @@ def read_stiffness(path: str | Path, dof_order: str | None = None, *, check: boo
             raise ValueError(f"{path.name} lacks array(s) {', '.join(missing)}")
     elif suffix == ".mtx":
         order = _resolve_order(mtx_dof_order(path), dof_order, path.name)
-        K = mmread(str(path))
+        K = read_matrix_market(path)
         K = K.toarray() if hasattr(K, "toarray") else np.asarray(K)
         out = _split_checked(K, order, check, rtol)
     else:
@@ -492,6 +493,64 @@ def _check_mm_header(path: Path) -> None:
         raise file_error(path, f"K is {rows}×{cols}, not square")
 
 
+def read_matrix_market(path: Path):
+    """K of a real Matrix Market file (coordinate or array; general or symmetric), N/m.
+
+    Parsed here rather than by :func:`scipy.io.mmread`, whose compiled reader crashes the
+    interpreter (segmentation fault, SciPy 1.17) on a file cut inside a number such as
+    ``3.6688E``: a truncated or damaged file is refused in one line instead.
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix (coordinate) or numpy.ndarray (array), shape (rows, cols)
+    """
+    _check_mm_header(path)
+    rows, cols, entries, layout, _, symm = mminfo(str(path))
+    lines = path.read_text(encoding="latin-1").splitlines()
+    start = next(i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("%"))
+    tokens = " ".join(lines[start + 1:]).split()
+    sym = symm == "symmetric"
+    need = (3 * entries if layout == "coordinate"
+            else rows * (rows + 1) // 2 if sym else rows * cols)
+    if len(tokens) != need:
+        raise file_error(path, f"holds {len(tokens)} numbers after its size line where "
+                         f"'{lines[start].strip()}' needs {need}"
+                         + (" (file truncated?)" if len(tokens) < need else ""))
+    try:
+        vals = np.array(tokens, float)
+    except ValueError:
+        bad = next(t for t in tokens if not _is_float(t))
+        raise file_error(path, f"{bad!r} is not a number (file truncated or damaged?)") \
+            from None
+    if layout == "coordinate":
+        ijv = vals.reshape(-1, 3)
+        i, j = ijv[:, 0] - 1, ijv[:, 1] - 1
+        if np.any(i != np.round(i)) or np.any(j != np.round(j)) or i.min(initial=0) < 0 \
+                or j.min(initial=0) < 0 or i.max(initial=0) >= rows or j.max(initial=0) >= cols:
+            raise file_error(path, "an entry's row or column is not an index of the matrix")
+        i, j, v = i.astype(np.int64), j.astype(np.int64), ijv[:, 2]
+        if sym:
+            off = i != j
+            i, j, v = (np.concatenate([i, j[off]]), np.concatenate([j, i[off]]),
+                       np.concatenate([v, v[off]]))
+        return sp.csr_matrix((v, (i, j)), shape=(rows, cols))
+    if not sym:
+        return vals.reshape(cols, rows).T.copy()
+    K = np.zeros((rows, rows))
+    jj, ii = np.triu_indices(rows)                 # column by column, lower triangle
+    K[ii, jj] = vals
+    K[jj, ii] = vals
+    return K
+
+
+def _is_float(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
 def _raw_mtx(path: Path) -> RawMatrix:
     """A Matrix Market file: the full K; ``% dof_order:`` / ``% tangential_dims:`` comments."""
     stated = {}
@@ -508,13 +567,8 @@ def _raw_mtx(path: Path) -> RawMatrix:
             stated["tangential_dims"] = int(stated["tangential_dims"])
         except ValueError:
             raise file_error(path, "the comment '% tangential_dims:' must be 1 or 2") from None
-    _check_mm_header(path)
-    try:
-        K = mmread(str(path))
-    except (ValueError, OSError, IndexError, TypeError) as exc:
-        raise file_error(path, f"not a readable Matrix Market file: {exc}") from None
-    return RawMatrix(K.tocsr() if hasattr(K, "tocsr") else np.asarray(K, float), stated=stated,
-                     format="matrix-market")
+    K = read_matrix_market(path)
+    return RawMatrix(K, stated=stated, format="matrix-market")
 
 
 def _dof_map(raw: RawMatrix, dof_map, tangential_dims: int | None, where: str) -> DofMap:

@@ -16,7 +16,9 @@ refused (its components are not the global x, y, z).
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import io
 import logging
 from pathlib import Path
 
@@ -85,7 +87,10 @@ def read(path: Path, keys: dict | None = None) -> RawMatrix:
     log.setLevel(logging.ERROR)
     model = BDF(debug=None, log=log)
     try:
-        model.read_bdf(str(path), punch=punch, xref=False, validate=False)
+        # pyNastran prints the fields of a card it cannot parse: keep the terminal to the
+        # one line said below
+        with contextlib.redirect_stdout(io.StringIO()):
+            model.read_bdf(str(path), punch=punch, xref=False, validate=False)
     except Exception as exc:  # noqa: BLE001 - pyNastran raises many kinds; say it in one line
         msg = str(exc).strip().splitlines()
         raise file_error(path, "cannot read the Nastran DMIG cards, a card is cut short "
