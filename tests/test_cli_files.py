@@ -206,3 +206,16 @@ def test_a_resolved_dissipation_is_printed_as_it_is(run_cli, write_case, tmp_pat
     code, out, _ = run_cli("run", write_case(TWO_NODE), "--out", tmp_path / "o")
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert code == 0 and f"D = {summary['dissipation_per_cycle']:.6g} J" in out
+
+
+def test_a_tabulated_normal_load_needs_no_p0(run_cli, write_case, tmp_path):
+    """The docs: a p_table carries the whole normal load (p0 defaults to 0 then); a
+    harmonic load without p0 is still refused naming loading.p0."""
+    text = TWO_NODE.replace("p0 = [1.0, 1.0]", "theta = [0.0, 3.0]\n"
+                            "p_table = [[1.0, 1.0], [1.2, 0.9]]")
+    text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(("p1", "p1_phase")))
+    code, _, err = run_cli("run", write_case(text + "\n"), "--out", tmp_path / "o", "-q")
+    assert code == 0, err
+    text = "\n".join(ln for ln in TWO_NODE.splitlines() if not ln.startswith("p0"))
+    code, _, err = run_cli("run", write_case(text + "\n", "h.toml"), "--out", tmp_path / "h")
+    assert code == 2 and err.startswith("error: loading.p0")

@@ -42,7 +42,9 @@ def periodic_load(sec: Section, name: str, n: int, lam: float,
 
     Harmonic: ``name0`` (mean), ``name1`` (amplitude per node, or one row per harmonic),
     ``name1_phase`` (rad); or tabulated: ``theta`` (rad) and ``name_table`` (one row per
-    angle). The mean normal load ``p0`` is required; the others default to zero.
+    angle). The mean normal load ``p0`` is required with a harmonic ``p``; with a table
+    it defaults to zero (the table then carries the whole load); the others default to
+    zero.
 
     Parameters
     ----------
@@ -64,12 +66,16 @@ def periodic_load(sec: Section, name: str, n: int, lam: float,
     """
     shape = _shape(name, n, components)
     size = int(np.prod(shape))
-    mean = sec.array(f"{name}0", np.zeros(shape) if name == "q" else None, shape=shape,
+    table_key = f"{name}_table"
+    # a table may carry the whole normal load: p0 then defaults to 0 (it adds to the table)
+    optional = name == "q" or sec.has(table_key)
+    mean = sec.array(f"{name}0", np.zeros(shape) if optional else None, shape=shape,
                      scalar_ok=True)
     if mean is None:
-        raise sec.error(f"{name}0", "required key is missing (mean normal load per node)")
+        raise sec.error(f"{name}0", "required key is missing (mean normal load per node; "
+                                    "or give the whole normal load as theta and p_table)")
     mean = mean.reshape(size)
-    table_key, amp_key = f"{name}_table", f"{name}1"
+    amp_key = f"{name}1"
     if sec.has(table_key):
         if sec.has(amp_key):
             raise sec.error(amp_key, f"give either {amp_key} (harmonic) or {table_key} "
