@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from test_lap_joint_study import SMALL
 
 import slipcycle
 from slipcycle.discrete3d.shakedown import lambda2_open
@@ -91,32 +92,11 @@ def test_cli_shakedown_discrete3d_refuses_bad_options_in_one_line(argv, key, run
 
 # -- the lap joint (small, one protocol): it must be the joint ------------------------------
 
-LAP = """
-model = "lap_joint"
-[lap_joint]
-plate_width = 0.052
-bolt_count = 2
-bolt_diameter = 0.006
-washer_diameter = 0.016
-mesh_size = 0.008
-friction = 0.3
-[lap_joint.loading]
-preload = 10e3
-service_amplitude = 2e3
-[lap_joint.protocols]
-names = ["simultaneous"]
-[run]
-cycles = 20
-steps_per_cycle = 12
-steady_tol = 1e-6
-step_tolerance = 1e-4
-[output]
-fields = []
-"""
-
-
 def _lap_text() -> str:
-    return LAP
+    """The small joint of the lap-joint study tests, one protocol."""
+    old = 'names = ["sequential", "reversed", "simultaneous"]'
+    assert old in SMALL
+    return SMALL.replace(old, 'names = ["simultaneous"]')
 
 
 @pytest.fixture(scope="module")
@@ -150,6 +130,12 @@ def test_cli_shakedown_lap_joint_lambda2_is_confirmed_by_the_engine(lap_cli):
     assert lo <= region.lambda2 <= hi
     weak_hi = s["shakedown_limits"][0][1]
     assert weak_hi < lo and s["class_window"] == pytest.approx([weak_hi, lo])
+    # the numbers docs/discrete3d.md quotes
+    assert s["lambda2"][0] == pytest.approx(165.8, abs=0.05)
+    np.testing.assert_allclose(s["shakedown_limits"], [[57.0, 62.7], [159.6, 171.0]],
+                               atol=0.05)
+    text = (Path(__file__).parents[1] / "docs" / "discrete3d.md").read_text()
+    assert "λ2 = 165.8 N" in text and "[159.6, 171.0] N" in text and "[57.0, 62.7] N" in text
 
 
 @pytest.mark.parametrize("argv, key", [(["--random", "3"], "--random"),
