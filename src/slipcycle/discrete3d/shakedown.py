@@ -93,26 +93,6 @@ class SafeRegion3D:
     samples: int
 
 
-def _cone_rows(system: FrictionalSystem3D, r0: np.ndarray, r1: np.ndarray):
-    """Clarabel rows s = b − G y ∈ 𝒦³ per (sample, node), y = [v (2N), λ]."""
-    n = system.n_nodes
-    f = system.friction
-    A, B = system.A, system.B
-    ns = r0.shape[0]
-    # per node j: rows (t, u1, u2) = (f p, q1, q2) as affine functions of y
-    Gv = np.empty((n, 3, 2 * n))
-    Gv[:, 0] = f[:, None] * B
-    Gv[:, 1] = A[0::2]
-    Gv[:, 2] = A[1::2]
-    q0 = r0[:, :2 * n].reshape(ns, n, 2)
-    q1 = r1[:, :2 * n].reshape(ns, n, 2)
-    p0, p1 = r0[:, 2 * n:], r1[:, 2 * n:]
-    b = np.concatenate([(f * p0)[:, :, None], q0], axis=2)          # (ns, n, 3)
-    g_lam = np.concatenate([(f * p1)[:, :, None], q1], axis=2)      # (ns, n, 3)
-    G = np.concatenate([np.broadcast_to(Gv, (ns, n, 3, 2 * n)), g_lam[..., None]], axis=3)
-    return -G.reshape(ns * n * 3, 2 * n + 1), b.reshape(-1)
-
-
 def lambda2_socp(system: FrictionalSystem3D, load: Load3D, steps_per_cycle: int = 100,
                  *, lam_max: float = 1e6, tol: float = 1e-9) -> SafeRegion3D:
     """λ2 by the second-order cone program of the module docstring.
@@ -142,32 +122,12 @@ def lambda2_socp(system: FrictionalSystem3D, load: Load3D, steps_per_cycle: int 
     theta, _ = load.cycle_samples(steps_per_cycle)
     theta = theta[:-1]
     r0, r1 = load.split_lam(theta)
-    G, b = _cone_rows(system, r0, r1)
-    nv = 2 * n + 1
-    # λ ≥ 0 and λ ≤ lam_max as two non-negative rows, then the cones
-    Gb = np.zeros((2, nv))
-    Gb[0, -1] = -1.0
-    Gb[1, -1] = 1.0
-    Aall = sp.csc_matrix(np.vstack([Gb, G]))
-    ball = np.concatenate([[0.0, lam_max], b])
-    cones = [clarabel.NonnegativeConeT(2)] + [clarabel.SecondOrderConeT(3)] * (len(b) // 3)
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    settings.tol_gap_abs = settings.tol_gap_rel = tol
-    settings.tol_feas = tol
-    c = np.zeros(nv)
-    c[-1] = -1.0
-    # a tiny regularisation of v picks the safe state of least norm at λ2
-    P = sp.csc_matrix(sp.diags(np.concatenate([np.full(2 * n, 1e-12), [0.0]])))
-    solver = clarabel.DefaultSolver(P, c, Aall, ball, cones, settings)
-    sol = solver.solve()
-    status = str(sol.status)
-    if "Infeasible" in status and "Dual" not in status:
+    closed = np.zeros((theta.size, n), bool)
+    status, y = _socp(*_open_rows(system, r0, r1, closed), lam_max, tol)
+    if y is None:
         return SafeRegion3D(0.0, np.zeros((n, 2)), False, status, theta.size)
-    if "Solved" not in status:
-        raise SolverError(f"the shakedown cone program stopped with status {status}")
-    y = np.asarray(sol.x)
-    return SafeRegion3D(float(y[-1]), y[:2 * n].reshape(n, 2), True, status, theta.size)
+    v = y[:-1] * _scales(system, r0, r1)[1]
+    return SafeRegion3D(float(y[-1]), v.reshape(n, 2), True, status, theta.size)
 
 
 def is_safe(system: FrictionalSystem3D, load: Load3D, v: np.ndarray,
