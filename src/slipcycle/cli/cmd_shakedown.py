@@ -72,7 +72,8 @@ def execute(args: argparse.Namespace) -> int:
                                      "--lam-max, --lam-points, --lam-tol"
                                      + (", --protocols" if case.model == "discrete3d"
                                         else ""))
-        window = {"lam_max": args.lam_max, "lam_points": args.lam_points or 9,
+        window = {"lam_max": args.lam_max,
+                  "lam_points": 9 if args.lam_points is None else args.lam_points,
                   "lam_tol": 1e-2 if args.lam_tol is None else args.lam_tol}
         if case.model == "discrete3d":
             from slipcycle.studies.shakedown3d import shakedown3d_study
@@ -92,7 +93,8 @@ def execute(args: argparse.Namespace) -> int:
     from slipcycle.studies.shakedown import shakedown_study
 
     status = shakedown_study(
-        case, args.out, lam_max=args.lam_max, lam_points=args.lam_points or 21,
+        case, args.out, lam_max=args.lam_max,
+        lam_points=21 if args.lam_points is None else args.lam_points,
         starts=8 if args.starts is None else args.starts,
         seed=args.seed or 0, tol=1e-9 if args.tol is None else args.tol,
         lam_tol=1e-3 if args.lam_tol is None else args.lam_tol, **study_options(args))
