@@ -49,7 +49,11 @@ in a step in which a slipping node stops, a node slipping that was stuck (the si
 secant iteration on steps of a fraction of the step (:meth:`Evolution3D._locate_event`;
 exact for one tangential direction, where φ and ψ are affine between events), as the
 2-D model's event-driven solver does by construction; the node then takes its state
-from that instant.
+from that instant. With fixed steps every such event is located (to ``event_tol``); with
+step doubling only as far as the step control's tolerance asks: an event whose
+neglect moves no node by more than ``step_tol`` × the displacement scale is not located,
+and the location stops once the rest to the event is below half that. Each located
+event costs a few solves (the secant iterations, and the step split in two).
 
 Energy bookkeeping per step (trapezoidal): D_j += −½(q_j⁰ + q_j¹)·Δv_j and
 W += ½(x⁰ + x¹)·Δr^w; with these the discrete stored energy Π = ½xᵀKx + r^wᵀx changes by
@@ -793,6 +797,7 @@ class Evolution3D:
             if same and abs(g[j]) <= tol:
                 best = (s, step)
                 break
+            first = len(pts[True]) == 1
             pts[same].append((s, g[j]))
             if same:
                 lo = s
@@ -800,9 +805,29 @@ class Evolution3D:
                 hi, best = s, (s, step)
             if hi - lo <= 1e-15:
                 break
+            if same and self.adaptive:
+                # with step doubling the event needs locating only as far as the step
+                # control's tolerance: the movement the whole step would not book
+                # (:meth:`_moved`) up to the estimated event, or from s to it
+                rate = self._moved(step, full) / s
+                s_event = self._secant_guess(pts, lo, hi, 0.0)
+                if first and rate * s_event <= self.step_tol * self.disp_scale:
+                    return None
+                if rate * (s_event - s) <= 0.5 * self.step_tol * self.disp_scale:
+                    best = (s, step)
+                    break
         s, step = best
         edge = self.event_min / width
         return (s, step) if edge < s < 1.0 - edge else None
+
+    def _moved(self, step: Step, full: Step) -> float:
+        """Largest slip increment [m] up to the end of ``step`` (before the event) of
+        the nodes whose state differs between the start and the end of ``full``: they
+        slipped, or moved freely while open, and the whole step, keeping its end
+        state's modes, books none of it (about the error of not locating the event)."""
+        nodes = np.flatnonzero(self.modes != full.modes)
+        dofs = self.solver._rows_q[nodes].ravel()
+        return float(np.max(np.abs(step.x[dofs] - self.x[dofs]), initial=0.0))
 
     @staticmethod
     def _secant_guess(pts: dict, lo: float, hi: float, tol: float) -> float:
@@ -822,7 +847,10 @@ class Evolution3D:
         return 0.5 * (lo + hi)
 
     def _interval(self, rwa: np.ndarray, rwb: np.ndarray, full: Step | None, depth: int,
-                  guess: tuple | None = None, fa: float = 0.0, fb: float = 1.0):
+                  guess: tuple | None = None, fa: float = 0.0, fb: float = 1.0,
+                  at_event: bool = False):
+        # at_event: the interval ends at a located event, where the path is not smooth:
+        # no Richardson extrapolation onto it (its cone projection could close the node)
         x0, r0 = self.x, self.r
         if full is None:
             full = self._solve(x0, r0, rwb - rwa, guess)
@@ -836,8 +864,8 @@ class Evolution3D:
             if self._totals is not None:
                 self._totals.events += 1
             self._leaves.append((fa, fb, depth, "L", ()))
-            self._interval(rwa, rws, step, depth, fa=fa, fb=fs)
-            self._interval(rws, rwb, None, depth, fa=fs, fb=fb)
+            self._interval(rwa, rws, step, depth, fa=fa, fb=fs, at_event=True)
+            self._interval(rws, rwb, None, depth, fa=fs, fb=fb, at_event=at_event)
             return
         if full is not None and (not self.adaptive or self._exact(full)):
             self._leaves.append((fa, fb, depth, "E", (full.modes,)))
@@ -852,7 +880,7 @@ class Evolution3D:
         g2 = None if full is None else (full.x, full.r)
         h2 = None if h1 is None else self._solve(h1.x, h1.r, rwb - mid, g2)
         if full is not None and h2 is not None:
-            ok, smooth = self._accept(x0, r0, full, h1, h2)
+            ok, smooth = self._accept(x0, r0, full, h1, h2, False if at_event else None)
             if ok:
                 self._leaves.append((fa, fb, depth, "X" if smooth else "H",
                                      (h1.modes, h2.modes)))
@@ -879,10 +907,10 @@ class Evolution3D:
         # h2 was computed from h1: still valid if the first half was kept as h1; else a
         # predictor for the second half (same end load, so its reactions are consistent)
         if h1 is not None and self.x is h1.x:
-            self._interval(mid, rwb, h2, depth + 1, fa=fm, fb=fb)
+            self._interval(mid, rwb, h2, depth + 1, fa=fm, fb=fb, at_event=at_event)
         else:
-            self._interval(mid, rwb, None, depth + 1,
-                           None if h2 is None else (h2.x, h2.r), fa=fm, fb=fb)
+            self._interval(mid, rwb, None, depth + 1, None if h2 is None else (h2.x, h2.r),
+                           fa=fm, fb=fb, at_event=at_event)
 
     def _replay_step(self, rwa, rwb, kind: str, modes: tuple) -> bool:
         """Solve one recorded sub-step as the adaptive method kept it and commit it;
