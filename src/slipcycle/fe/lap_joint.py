@@ -271,6 +271,23 @@ class LapJoint:
             raise InputError("end_relief", "the rounded ends must stop short of the "
                              f"washers: end_relief < {self.edge_distance:g} m (washer rim to "
                              f"plate end), got {self.end_relief:g}")
+        self._check_size()
+
+    def _check_size(self) -> None:
+        """Refuse, before meshing, a mesh whose estimated memory exceeds the budget
+        (:func:`slipcycle.io.sizes.check_memory`): the sparse stiffness of both plates
+        (about 81 nonzeros per row of 3 dofs per node) and the dense reduced matrices of
+        the interface nodes (3 dofs each), in the message with the node counts."""
+        from slipcycle.io.sizes import check_memory
+
+        h = self.mesh_size / 2 ** self.refine
+        along = math.ceil(self.plate_width / h) + 1
+        nodes = 2 * (math.ceil(self.plate_length / h) + 1) * along * (self.layer_count + 1)
+        contact = (math.ceil(self.overlap / h) + 1) * along
+        nbytes = 3 * nodes * 81 * 12 + 2 * (3 * contact) ** 2 * 8
+        check_memory("mesh_size", nbytes, f"about {nodes:.3g} nodes ({contact:.3g} on the "
+                     f"interface) at mesh_size {self.mesh_size:g} m and refine = "
+                     f"{self.refine}", advice="use a larger mesh_size or a smaller refine")
 
     def _check_bolts(self) -> np.ndarray:
         K, W, c = int(self.bolt_count), self.plate_width, self.overlap
