@@ -211,6 +211,8 @@ def _lap_joint_cases() -> list[Bad]:
         "element-unknown": ('element = "H8I"', 'element = "Q4"', "lap_joint.element"),
         "mesh-size-zero": ("mesh_size = 0.005", "mesh_size = 0.0", "lap_joint.mesh_size"),
         # refused before meshing with the node count and memory (it ran for minutes)
+        "bolt-wider-than-plate": ("bolt_diameter = 0.0066", "bolt_diameter = 0.04",
+                                  "lap_joint.bolt_diameter"),
         "mesh-size-1e-5": ("mesh_size = 0.005", "mesh_size = 1e-5", "lap_joint.mesh_size"),
         "friction-negative": ("friction = 0.3", "friction = -0.3", "lap_joint.friction"),
         "rtol-one": ("rtol = 0.05", "rtol = 1.5", "lap_joint.convergence.rtol"),

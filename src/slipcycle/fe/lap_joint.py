@@ -252,6 +252,10 @@ class LapJoint:
         if self.overlap >= self.plate_length:
             raise InputError("overlap", f"must be < plate_length ({self.plate_length:g} m), "
                              f"got {self.overlap:g}")
+        if self.bolt_diameter >= min(self.plate_width, self.overlap):
+            raise InputError("bolt_diameter", "the hole must fit in the plate: it must be "
+                             f"< plate_width ({self.plate_width:g} m) and overlap "
+                             f"({self.overlap:g} m), got {self.bolt_diameter:g}")
         if self.washer_diameter <= self.bolt_diameter:
             raise InputError("washer_diameter", "must exceed bolt_diameter "
                              f"({self.bolt_diameter:g} m), got {self.washer_diameter:g}")
