@@ -63,7 +63,12 @@ def read_meshio(path: str | Path, key: str):
     try:
         return meshio.read(str(path))
     except Exception as exc:  # meshio raises many types
-        raise CaseError(key, f"cannot read mesh file {path}: {exc}") from None
+        text = " ".join(str(exc).split())[:200]
+        if isinstance(exc, IndexError | EOFError | StopIteration) or "unexpected end" in \
+                text.lower():
+            # meshio's parsers run off the end of a cut file ("list index out of range")
+            text = f"the file ends early (truncated?): {type(exc).__name__}: {text}"
+        raise CaseError(key, f"cannot read mesh file {path}: {text}") from None
 
 
 def used_cells(m, types: tuple[str, ...], corners: int, what: str, path, key: str

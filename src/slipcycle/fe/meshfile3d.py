@@ -132,6 +132,11 @@ def read_mesh_solid(path: str | Path, tags: dict[str, str], *, key: str = "fe.me
     pts = np.asarray(m.points, float)
     if pts.shape[1] != 3:
         raise CaseError(key, f"mesh file {path} has {pts.shape[1]}-D points; need x, y, z")
+    bad = np.flatnonzero(~np.all(np.isfinite(pts[used]), axis=1))
+    if bad.size:
+        raise CaseError(key, f"mesh file {path}: {bad.size} node(s) with a non-finite "
+                             f"coordinate (first: node {int(used[bad[0]])} at "
+                             f"{pts[used[bad[0]]].tolist()})")
     p = pts[used].T * scale
     t = t.T
     e1, e2, e3 = (p[:, t[j]] - p[:, t[0]] for j in (1, 2, 3))
