@@ -45,3 +45,17 @@ def test_a_truncated_mesh_file_is_named_as_truncated(tmp_path):
     msg = str(info.value)
     assert msg.startswith("fe.mesh.file: cannot read mesh file") and "\n" not in msg
     assert "truncated" in msg or "end" in msg.lower(), msg
+
+
+def test_a_missing_clamped_set_is_reported_under_fe_mesh_clamped(tmp_path, run_cli):
+    """The tag named in ``clamped`` is not in the file: the key that names it is blamed
+    (it was ``fe.mesh.nosuch``, the tag itself)."""
+    _write(tmp_path / "box.msh", box())
+    case = tmp_path / "model.toml"
+    case.write_text('model = "fe"\n[fe]\ngeometry = "mesh"\n[fe.mesh]\nfile = "box.msh"\n'
+                    'contact = "base"\nclamped = ["nosuch"]\nE = 2.1e11\nnu = 0.3\n'
+                    '[[fe.load_case]]\nname = "push"\nboundary = "top"\n'
+                    'displacement = [1e-6, 0.0, 0.0]\n')
+    code, _, err = run_cli("reduce", case, "--out", tmp_path / "r.npz")
+    assert code == 2 and err.startswith("error: fe.mesh.clamped: "), err
+    assert "'nosuch'" in err and not (tmp_path / "r.npz").exists()

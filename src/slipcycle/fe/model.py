@@ -137,7 +137,7 @@ def _load_specs(fe: Section, dims: int) -> list[dict]:
 
 
 def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem | MeshSolid:
-    from slipcycle.fe.meshfile import is_solid_mesh, read_mesh_body, read_meshio
+    from slipcycle.fe.meshfile import is_solid_mesh, read_meshio
 
     ms = fe.table("mesh")
     path = ms.path("file")
@@ -161,6 +161,24 @@ def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem | MeshSolid:
     tags = {"contact": contact}
     tags.update({t: t for t in raw})
     tags.update({d["boundary"]: d["boundary"] for d in loads})
+    # a tag error names the key that lists the tag, not the tag itself (fe.mesh.nosuch)
+    blame = {ms.key(t): ms.key("clamped") for t in raw if t != "contact"}
+    blame.update({ms.key(d["boundary"]): f"fe.load_case[{i}].boundary"
+                  for i, d in enumerate(loads)
+                  if d["boundary"] not in raw and d["boundary"] != "contact"})
+    try:
+        return _read_mesh(ms, path, data, solid, tags, mat, normal, raw, loads, scale,
+                          common)
+    except CaseError as exc:
+        if exc.key in blame:
+            raise CaseError(blame[exc.key], exc.problem) from None
+        raise
+
+
+def _read_mesh(ms, path, data, solid, tags, mat, normal, raw, loads, scale, common):
+    """The body of a mesh file (tags named: ``tags``), 3-D solid or 2-D plane."""
+    from slipcycle.fe.meshfile import read_mesh_body
+
     if solid:
         from slipcycle.fe.meshfile3d import read_mesh_solid
 
