@@ -95,8 +95,10 @@ def test_no_progress_and_progress_exclude_each_other(run_cli, write_case, tmp_pa
 def test_examples_lists_every_shipped_case(run_cli):
     code, out, err = run_cli("examples")
     assert code == 0 and err == ""
-    names = [ln.split()[0] for ln in out.strip().splitlines()]
+    listing, footer = out.strip().split("\n\n")          # the table, then how to run
+    names = [ln.split()[0] for ln in listing.splitlines()]
     assert names == list_examples() and "halfspace_sphere" in names
+    assert "slipcycle examples --copy" in footer
 
 
 def test_examples_copy_gives_cases_that_run(run_cli, tmp_path):
