@@ -230,6 +230,7 @@ def test_reduce_writes_a_discrete3d_case_that_run_and_the_python_api_solve_alike
     (('displacement = [0, 0, -1]', 'displacement = [0, -1]'), "displacement"),
     (('[fe.mesh]', 'thickness = 0.01\n[fe.mesh]'), "fe.thickness"),
     (('file = "box.msh"', 'file = "missing.msh"'), "fe.mesh.file"),
+    (('scale = 1.0', 'scale = 1.0\nnormal = [0, 0, -1]'), "fe.mesh.normal"),
 ])
 def test_mistakes_in_a_3d_mesh_model_end_in_one_line_naming_the_key(run_cli, box_model,
                                                                     edit, key):
@@ -354,3 +355,54 @@ def test_gap_and_areas_of_any_tilted_box_in_any_unit(tmp_path_factory, nx, ny, t
     assert np.abs(g - tilt * x).max() <= 1e-9 * max(tilt, 1e-3) * LX
     assert area.sum() == pytest.approx(np.sqrt(1 + tilt**2) * LX * LY, rel=1e-12)
     assert red.n_nodes == (nx + 1) * (ny + 1)
+
+
+def test_a_flat_on_the_wrong_side_is_refused_by_run_and_nothing_is_written(run_cli,
+                                                                         box_model):
+    """The box lies above z = 0: a flat normal [0, 0, -1] points away from it (the gaps
+    and normal loads would change sign and every node stay open). `run` refuses it in one
+    line naming fe.mesh.normal; the right normal [0, 0, 1] runs."""
+    d = box_model
+    (d / "box.toml").write_text(MODEL.replace("scale = 1.0", "scale = 1.0\nnormal = [0, 0, -1]"))
+    code, out, err = run_cli("run", d / "box.toml", "--out", d / "run")
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "fe.mesh.normal" in lines[0], err
+    assert "points away from the body" in lines[0] and "Traceback" not in err
+    assert not (d / "run").exists()
+    (d / "box.toml").write_text(MODEL.replace("scale = 1.0", "scale = 1.0\nnormal = [0, 0, 1]"))
+    code, out, err = run_cli("run", d / "box.toml", "--out", d / "run")
+    assert code == 0, err
+    assert json.loads((d / "run" / "summary.json").read_text())["dissipation_per_cycle"] > 0
+
+
+def _rotation(axis, angle) -> np.ndarray:
+    """Rodrigues rotation matrix (3, 3) about the unit ``axis`` by ``angle`` (rad)."""
+    k = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+@settings(max_examples=40, deadline=None)
+@given(axis=st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1),
+       angle=st.floats(-np.pi, np.pi), tilt=st.floats(0.0, 0.5), flip=st.booleans())
+@example(axis=(1, 0, 0), angle=np.pi, tilt=0.0, flip=False)
+@example(axis=(0, 1, 0), angle=np.pi / 2, tilt=0.3, flip=True)
+def test_the_flat_side_check_accepts_the_rotated_normal_and_refuses_its_reverse(
+        axis, angle, tilt, flip):
+    """A box on its (tilted) base, turned by any rotation R: the flat's normal into the
+    body is R e_z, accepted; its reverse −R e_z is refused under the key ``normal``. The
+    tetrahedra's vertex order (either orientation) does not matter."""
+    from slipcycle.errors import InputError
+    from slipcycle.fe.meshfile3d import check_flat_side
+
+    mesh = box(3, 2, 1, tilt=tilt)
+    R = _rotation(axis, angle)
+    turned = MeshTet(R @ mesh.p, mesh.t[[0, 2, 1, 3]] if flip else mesh.t)
+    bf = turned.boundary_facets()
+    on = mesh.p[:, turned.facets[:, bf]]  # the vertices' unturned coordinates
+    base = bf[np.all(np.abs(on[2] - tilt * on[0]) < 1e-12, axis=0)]
+    assert base.size == 2 * 3 * 2
+    check_flat_side(turned, base, R @ [0, 0, 1.0])
+    with pytest.raises(InputError) as info:
+        check_flat_side(turned, base, -(R @ [0, 0, 1.0]))
+    assert info.value.key == "normal"

@@ -10,7 +10,8 @@ tetrahedra.
 
 The body rests on a rigid flat perpendicular to ``normal`` (the unit normal of the flat
 pointing into the body) through the contact node lowest along it; the other contact nodes
-start at the gap g_j = n·(x_j − x_lowest). Contact pairs are node-to-rigid-flat, so the
+start at the gap g_j = n·(x_j − x_lowest); a normal pointing away from the body is refused
+(:func:`check_flat_side`). Contact pairs are node-to-rigid-flat, so the
 contact model is exact node-to-node for a conforming counter-surface (Wriggers 2006,
 §4.1). The reduction itself is :func:`slipcycle.fe.contact3d.reduce_contact_3d`.
 
@@ -35,8 +36,8 @@ from slipcycle.fe.meshfile import cells_of_tag, known_tags, read_meshio, used_ce
 from slipcycle.io.case import CaseError
 from slipcycle.io.matrices import ReducedStiffness
 
-__all__ = ["MeshSolid", "check_reduction_memory", "node_areas", "read_mesh_solid",
-           "reduce_mesh_case", "reduce_mesh_solid", "surface_node_count"]
+__all__ = ["MeshSolid", "check_flat_side", "check_reduction_memory", "node_areas",
+           "read_mesh_solid", "reduce_mesh_case", "reduce_mesh_solid", "surface_node_count"]
 
 #: node numbers must stay below this for the int64 keys of faces (n³ < 2⁶³)
 _MAX_NODES = 2_000_000
@@ -240,6 +241,45 @@ def node_areas(mesh: MeshTet, facets: np.ndarray, element: str) -> np.ndarray:
     return out
 
 
+def check_flat_side(mesh: MeshTet, facets: np.ndarray, normal) -> None:
+    """Refuse a rigid flat on the wrong side of the body.
+
+    The contact surface's outward normals (away from the tetrahedron each triangle bounds)
+    must, on average over its area, point against ``normal``, the flat's normal into the
+    body: a body resting on a flat faces it with −n (Wriggers 2006, §4.1). With n pointing
+    away from the body every gap and normal load changes sign and the reduction describes
+    a body that never touches the flat.
+
+    Parameters
+    ----------
+    mesh : skfem.MeshTet
+    facets : numpy.ndarray of int
+        Indices into ``mesh.facets`` of the contact surface.
+    normal : array_like, shape (3,)
+        Unit normal of the rigid flat, meant to point into the body.
+
+    Raises
+    ------
+    slipcycle.errors.InputError
+        Key ``normal`` when the area-weighted mean outward normal m̄ of the surface has
+        m̄·n ≥ 0.
+    """
+    facets = np.asarray(facets)
+    f = mesh.facets[:, facets]
+    t = mesh.t[:, mesh.f2t[0, facets]]
+    opposite = t.sum(axis=0) - f.sum(axis=0)  # the vertex of the tetrahedron off the face
+    p0 = mesh.p[:, f[0]]
+    a2n = np.cross(mesh.p[:, f[1]] - p0, mesh.p[:, f[2]] - p0, axis=0)  # 2·area·normal
+    a2n *= np.where(np.einsum("ij,ij->j", a2n, p0 - mesh.p[:, opposite]) < 0, -1.0, 1.0)
+    n = np.asarray(normal, float)
+    along = float(n @ a2n.sum(axis=1)) / float(np.linalg.norm(a2n, axis=0).sum())
+    if along >= 0:
+        raise InputError("normal", f"{[float(v) for v in n]} points away from the body: "
+                         f"the contact surface's outward normals point along +n (mean "
+                         f"n·n_out = {along:+.2f}), so the body lies on the side of −n; "
+                         "the flat's normal must point into the body (reverse it)")
+
+
 def reduce_mesh_solid(solid: MeshSolid, contact: str = "contact"
                       ) -> tuple[ReducedStiffness, np.ndarray]:
     """Reduce a :class:`MeshSolid` on its rigid flat to the contact nodes.
@@ -264,7 +304,8 @@ def reduce_mesh_solid(solid: MeshSolid, contact: str = "contact"
     Raises
     ------
     slipcycle.errors.InputError
-        A contact node that is also clamped or displacement-loaded (key ``clamped`` or the
+        A flat on the wrong side of the body (key ``normal``, :func:`check_flat_side`), a
+        contact node that is also clamped or displacement-loaded (key ``clamped`` or the
         case's name), or a surface without nodes.
     slipcycle.condensation.SingularModelError
         The body is not held against rigid motion with the contact nodes held.
@@ -276,6 +317,7 @@ def reduce_mesh_solid(solid: MeshSolid, contact: str = "contact"
     dofs, xyz = node_dofs_3d(basis)
     n = np.asarray(solid.normal, float)
     n = n / np.linalg.norm(n)
+    check_flat_side(solid.mesh, solid.surfaces[contact], n)
     cnodes = _surface_nodes(basis, dofs, solid.surfaces[contact])
     cnodes = cnodes[np.lexsort((xyz[0, cnodes], xyz[1, cnodes], xyz[2, cnodes]))]
     height = n @ xyz[:, cnodes]
@@ -320,7 +362,8 @@ def reduce_mesh_solid(solid: MeshSolid, contact: str = "contact"
 
 def reduce_mesh_case(solid: MeshSolid) -> tuple[ReducedStiffness, np.ndarray]:
     """:func:`reduce_mesh_solid` for a model file: every failure a :class:`CaseError`
-    naming the key of the model file (``fe.mesh.clamped``, ``fe.load_case``, ``fe``)."""
+    naming the key of the model file (``fe.mesh.normal``, ``fe.mesh.clamped``,
+    ``fe.load_case``, ``fe``)."""
     from slipcycle.condensation import SingularModelError
     from slipcycle.io.matrices import StiffnessError
 
@@ -329,8 +372,8 @@ def reduce_mesh_case(solid: MeshSolid) -> tuple[ReducedStiffness, np.ndarray]:
     except StiffnessError as exc:
         raise CaseError("fe", f"reduced stiffness {exc.problem}") from None
     except InputError as exc:
-        raise CaseError("fe.mesh.clamped" if exc.key == "clamped" else "fe.load_case",
-                        exc.problem) from None
+        key = {"clamped": "fe.mesh.clamped", "normal": "fe.mesh.normal"}
+        raise CaseError(key.get(exc.key, "fe.load_case"), exc.problem) from None
     except SingularModelError as exc:
         raise CaseError("fe.mesh.clamped", f"the body is not held against rigid motion "
                         f"with its contact nodes held ({exc}); clamp a surface or "
