@@ -406,3 +406,37 @@ def test_the_flat_side_check_accepts_the_rotated_normal_and_refuses_its_reverse(
     with pytest.raises(InputError) as info:
         check_flat_side(turned, base, -(R @ [0, 0, 1.0]))
     assert info.value.key == "normal"
+
+
+@pytest.mark.parametrize("command", ["reduce", "run"])
+def test_a_triangle_only_mesh_with_3d_coordinates_is_refused_as_having_no_volume_elements(
+        run_cli, tmp_path, command):
+    """The triangulated skin of the box (no tetrahedra, z varies) with the 3-D model's
+    loads: one line naming fe.mesh.file that says the mesh has no volume elements (it was
+    blamed on the shape of fe.load_case[0].displacement); nothing written. The Python
+    reader of plane meshes refuses it alike."""
+    from slipcycle.fe.meshfile import read_mesh_body
+    from slipcycle.io.case import CaseError
+
+    mesh = box()
+    skin = mesh.facets[:, mesh.boundary_facets()].T
+    base = faces_on(mesh, lambda c: np.abs(c[2]) < 1e-12)
+    top = faces_on(mesh, lambda c: np.abs(c[2] - H) < 1e-12)
+    meshio.write(tmp_path / "box.msh", meshio.Mesh(
+        mesh.p.T, [("triangle", skin), ("triangle", base), ("triangle", top)],
+        cell_data={"gmsh:physical": [np.full(len(skin), 9), np.full(len(base), 1),
+                                     np.full(len(top), 2)],
+                   "gmsh:geometrical": [np.full(len(skin), 9), np.full(len(base), 1),
+                                        np.full(len(top), 2)]},
+        field_data={"base": np.array([1, 2]), "top": np.array([2, 2])}),
+        file_format="gmsh22", binary=False)
+    (tmp_path / "box.toml").write_text(MODEL)
+    out = ("--out", tmp_path / "o.npz", "--case", tmp_path / "c.toml") \
+        if command == "reduce" else ("--out", tmp_path / "run")
+    code, _, err = run_cli(command, tmp_path / "box.toml", *out)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: fe.mesh.file:"), err
+    assert "no 3-D (volume) elements" in lines[0] and "load_case" not in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.msh", "box.toml"]
+    with pytest.raises(CaseError, match="no 3-D"):
+        read_mesh_body(tmp_path / "box.msh", {"contact": "1"}, E, NU)

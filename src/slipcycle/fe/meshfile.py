@@ -17,7 +17,8 @@ from skfem import MeshTri
 from slipcycle.fe.geometry import Body
 from slipcycle.io.case import CaseError
 
-__all__ = ["read_mesh_body", "read_meshio", "is_solid_mesh", "cells_of_tag", "known_tags"]
+__all__ = ["read_mesh_body", "read_meshio", "is_solid_mesh", "check_planar", "cells_of_tag",
+           "known_tags"]
 
 
 def cells_of_tag(m, tag: str, kind: str = "line", corners: int = 2) -> np.ndarray | None:
@@ -92,6 +93,37 @@ def is_solid_mesh(m) -> bool:
     return any(b.type in ("tetra", "tetra10") for b in m.cells)
 
 
+def check_planar(m, path, key: str = "fe.mesh.file") -> None:
+    """Refuse a mesh without tetrahedra whose nodes do not lie in one plane z = const.
+
+    Such a file (e.g. the triangulated skin of a solid) is neither a plane body (read by
+    :func:`read_mesh_body` in the x–y plane) nor a 3-D body (which needs volume elements).
+
+    Parameters
+    ----------
+    m : meshio.Mesh
+    path : str or pathlib.Path
+        The file, for the message.
+    key : str
+        Case-file key the error names.
+
+    Raises
+    ------
+    CaseError
+        ``key``: z varies by more than 1e-12 of the extent in x–y (at least 1e-12).
+    """
+    pts = np.asarray(m.points, float)
+    if pts.ndim != 2 or pts.shape[1] < 3 or not len(pts):
+        return
+    dz = float(np.ptp(pts[:, 2]))
+    if dz > 1e-12 * max(float(np.ptp(pts[:, :2])), 1.0):
+        kinds = ", ".join(sorted({b.type for b in m.cells})) or "none"
+        raise CaseError(key, f"mesh file {path} has no 3-D (volume) elements (tetra, "
+                             f"tetra10; cells: {kinds}) but its nodes are not in a plane "
+                             f"(z varies by {dz:.3g}): a 3-D body needs tetrahedra, a plane "
+                             "body a mesh in z = const")
+
+
 def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
                    name: str = "body", key: str = "fe.mesh.file",
                    scale: float = 1.0, data=None) -> Body:
@@ -138,9 +170,8 @@ def read_mesh_body(path: str | Path, tags: dict[str, str], E: float, nu: float,
     """
     m = read_meshio(path, key) if data is None else data
     t, used, renumber = used_cells(m, ("triangle", "triangle6"), 3, "triangles", path, key)
+    check_planar(m, path, key)
     p = np.asarray(m.points, float)[used, :2].T * scale
-    if m.points.shape[1] > 2 and np.ptp(m.points[:, 2]) > 1e-12 * max(np.ptp(p), 1.0):
-        raise CaseError(key, f"mesh file {path} is not planar (z varies); need a 2-D mesh")
     mesh = MeshTri(p, t.T)
     facet_of = {}
     f = mesh.facets

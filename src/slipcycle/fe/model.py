@@ -137,12 +137,14 @@ def _load_specs(fe: Section, dims: int) -> list[dict]:
 
 
 def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem | MeshSolid:
-    from slipcycle.fe.meshfile import is_solid_mesh, read_meshio
+    from slipcycle.fe.meshfile import check_planar, is_solid_mesh, read_meshio
 
     ms = fe.table("mesh")
     path = ms.path("file")
     data = read_meshio(path, ms.key("file"))
     solid = is_solid_mesh(data)
+    if not solid:  # before the loads' shapes, which follow from the mesh's dimension
+        check_planar(data, path, ms.key("file"))
     if solid and fe.has("thickness"):
         raise fe.error("thickness", "not used with a 3-D (tetrahedral) mesh file")
     dims = 3 if solid else 2
