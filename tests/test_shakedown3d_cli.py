@@ -155,3 +155,24 @@ def test_cli_shakedown_lap_joint_refuses_protocols_file(run_cli, tmp_path, write
     code, _, err = run_cli("shakedown", case, "--out", tmp_path / "o", "--protocols",
                            tmp_path / "p.toml")
     assert code == 2 and "--protocols" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("command, which", [("shakedown", "discrete3d"),
+                                            ("shakedown", "lap_joint"),
+                                            ("basins", "lap_joint")])
+@pytest.mark.parametrize("argv, key", [(["--workers", "2"], "--workers"),
+                                       (["--resume"], "--resume"),
+                                       (["--scheduler", "tcp://127.0.0.1:8786"],
+                                        "--scheduler")])
+def test_3d_studies_without_a_sweep_store_refuse_the_sweep_options_in_one_line(
+        command, which, argv, key, run_cli, tmp_path, write_case):
+    """These studies run their simulations serially in this process: --workers,
+    --resume and --scheduler would be silently ignored, so they are refused (exit 2, one
+    line naming the option, before any run: no output directory)."""
+    case = write_case(_case_text() if which == "discrete3d" else _lap_text())
+    out = tmp_path / "o"
+    code, _, err = run_cli(command, case, "--out", out, *argv)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith(f"error: {key}:"), err
+    assert "without a sweep store" in lines[0] and "Traceback" not in err
+    assert not out.exists()

@@ -17,7 +17,9 @@ A ``model = "discrete3d"`` case (isotropic Coulomb cone, any N) takes ``--random
 A ``model = "lap_joint"`` case: the map of which assembly protocol of
 ``[lap_joint.protocols]`` shakes down at which service amplitude (9 amplitudes up to
 ``--lam`` [N], default 1.1 λ2), each protocol's largest shakedown amplitude bisected, and
-the window where one protocol shakes down and another slips (as ``slipcycle shakedown``).
+the window where one protocol shakes down and another slips (as ``slipcycle shakedown``);
+its runs go one after another in this process: no ``--workers``, ``--scheduler``,
+``--resume``.
 
 ``--lam`` overrides ``loading.lam``. Runs go through the sweep machinery (``DIR/basins.zarr``,
 ``--resume``, ``--workers``, ``--scheduler``); grid rows run in parallel threads.
@@ -28,7 +30,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from slipcycle.cli.common import add_common, count_option, finish_study, study_options
+from slipcycle.cli.common import (
+    add_common,
+    count_option,
+    finish_study,
+    refuse_sweep_options,
+    study_options,
+)
 
 
 def add_parser(sub) -> None:
@@ -65,6 +73,8 @@ def execute(args: argparse.Namespace) -> int:
                 raise CaseError(f"--{key}", "a lap_joint case maps its protocols of "
                                             "[lap_joint.protocols] over the service "
                                             "amplitude (--lam: the largest)")
+        refuse_sweep_options(args, "a lap_joint basins map",
+                             "discrete and discrete3d cases")
         status = lap_joint_shakedown_study(case, args.out, lam_max=args.lam)
         return finish_study(status, args, case, ("subjects", "lambda2", "class_window",
                                                  "shakedown_limits"))

@@ -19,7 +19,8 @@ bisected to ``--lam-tol`` × lam_max, the λ1 bracket and the class window (wher
 shakes down and another slips). The starts are the case's own and ``--protocols FILE``
 (discrete3d), or the assembly protocols of ``[lap_joint.protocols]`` (λ: the service
 amplitude in N). Defaults: 9 points, lam_tol 0.01; ``--starts``, ``--seed``, ``--tol``
-are for discrete cases.
+are for discrete cases, and so are ``--workers``, ``--scheduler`` and ``--resume`` (these
+runs go one after another in this process, without a sweep store).
 
 summary.json: ``lambda1``, ``lambda2``, ``lambda3_bracket``, ``lambda4_bracket`` (refined)
 and ``lambda3_grid_bracket``, ``lambda4_grid_bracket``, the extreme constraint data, the
@@ -32,7 +33,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from slipcycle.cli.common import add_common, count_option, finish_study, study_options
+from slipcycle.cli.common import (
+    add_common,
+    count_option,
+    finish_study,
+    refuse_sweep_options,
+    study_options,
+)
 
 
 def add_parser(sub) -> None:
@@ -72,6 +79,7 @@ def execute(args: argparse.Namespace) -> int:
                                      "--lam-max, --lam-points, --lam-tol"
                                      + (", --protocols" if case.model == "discrete3d"
                                         else ""))
+        refuse_sweep_options(args, f"a {case.model} shakedown study", "discrete cases")
         window = {"lam_max": args.lam_max,
                   "lam_points": 9 if args.lam_points is None else args.lam_points,
                   "lam_tol": 1e-2 if args.lam_tol is None else args.lam_tol}

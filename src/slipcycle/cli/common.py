@@ -391,6 +391,22 @@ def finish_study(status, args: argparse.Namespace, case, keys: tuple[str, ...], 
     return 0
 
 
+def refuse_sweep_options(args: argparse.Namespace, study: str, takes: str) -> None:
+    """Refuse ``--workers``, ``--scheduler`` and ``--resume`` for a study that runs its
+    simulations in this process without a sweep store (``study``, e.g. "a discrete3d
+    shakedown study"); ``takes`` names the cases that accept them."""
+    from slipcycle.io import CaseError
+
+    for option, given in (("--workers", args.workers is not None),
+                          ("--scheduler", args.scheduler is not None),
+                          ("--resume", bool(args.resume))):
+        if given:
+            raise CaseError(option, f"{study} runs its simulations one after another in "
+                                    "this process, without a sweep store to share or "
+                                    f"resume; --workers, --scheduler and --resume are for "
+                                    f"{takes}")
+
+
 def study_options(args: argparse.Namespace) -> dict:
     """The keyword arguments of the library's resumable studies from the common options."""
     return {"workers": args.workers, "scheduler": args.scheduler, "resume": args.resume,
