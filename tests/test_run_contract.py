@@ -175,7 +175,7 @@ def test_refusals():
         slipcycle.run(_model_object("halfspace", SPHERE), overrides={"loading.Q1": 1.0})
     with pytest.raises(CaseError, match="reduce"):
         slipcycle.run({"model": "fe", "fe": {}})
-    with pytest.raises(CaseError, match="cannot read case file"):
+    with pytest.raises(CaseError, match="no_such_case_file.toml: case file not found"):
         slipcycle.run("no_such_case_file.toml")
 
 

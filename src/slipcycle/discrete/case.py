@@ -324,7 +324,17 @@ def discrete_case(system: FrictionalSystem, load, run: Mapping | None = None, *,
 class DiscreteResult(CoupledResult):
     """Result of a discrete run (:class:`~slipcycle.coupled.case.CoupledResult` over a
     :class:`DiscreteCase` and the :class:`~slipcycle.discrete.steady.SteadyResult` of
-    :func:`~slipcycle.discrete.steady.simulate`)."""
+    :func:`~slipcycle.discrete.steady.simulate`).
+
+    Attributes
+    ----------
+    case : DiscreteCase
+        The validated case (system, load, run settings).
+    solution : SteadyResult
+        Histories of the cycles run and the classification of the last one.
+    wall_time_s : float
+        Seconds the simulation took.
+    """
 
     model: ClassVar[str] = "discrete"
     SUMMARY_UNITS: ClassVar[dict] = SUMMARY_UNITS

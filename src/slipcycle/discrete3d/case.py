@@ -203,7 +203,17 @@ SUMMARY_FLAGS = SHARED_FLAGS
 class DiscreteResult3D(CoupledResult):
     """Result of a ``discrete3d`` run (:class:`~slipcycle.coupled.case.CoupledResult` over
     a :class:`Discrete3DCase` and the :class:`~slipcycle.discrete3d.steady.SteadyResult3D`
-    of :func:`~slipcycle.discrete3d.steady.simulate3d`)."""
+    of :func:`~slipcycle.discrete3d.steady.simulate3d`).
+
+    Attributes
+    ----------
+    case : Discrete3DCase
+        The validated case (system, load, run settings).
+    solution : SteadyResult3D
+        Histories of the cycles run and the classification of the last one.
+    wall_time_s : float
+        Seconds the simulation took.
+    """
 
     model: ClassVar[str] = "discrete3d"
     SUMMARY_UNITS: ClassVar[dict] = SUMMARY_UNITS
