@@ -263,7 +263,8 @@ def test_a_slow_mode_step_that_carries_an_event_past_a_load_sample_lands_elsewhe
     d1, d0 = x[-1] - x[-2], x[-2] - x[-3]
     assert tight.steady_state == "not_converged"
     assert np.abs(d1 + d0).max() < 1e-3 * np.abs(d1).max()       # x alternates
-    assert float(f"{tight.residual:.1g}") == 7e-11
+    # alternating about 7e-11 apart here; the digit is round-off's, the decade is not
+    assert 1e-11 < tight.residual < 1e-10
     plain = simulate(system, load, accelerate=False, **kw)
     slow = simulate(system, load, accelerate=True, slow_modes=True, **kw)
     assert slow.solver_stats["slow_mode_steps"] >= 1
