@@ -75,7 +75,6 @@ def test_fe_examples_reduce_with_the_listed_command(name, run_cli, tmp_path, mon
 
 def test_demo_report_folder_has_the_users_umask(run_cli, tmp_path, monkeypatch):
     import slipcycle.cli.cmd_demo as demo
-
     from slipcycle.demo import DEMO_CASES
 
     # one quick case (an empty mapping is falsy: the command would run them all)

@@ -264,3 +264,27 @@ def test_an_export_cut_anywhere_is_refused_or_reads_the_same(name, where, tmp_pa
         return
     assert b"\n" not in data[cut:].rstrip(b"\r\n"), "a cut before the last line was read"
     assert red.C.shape == full.C.shape
+
+
+@pytest.mark.parametrize(("name", "code"), [("job.sti", "CalculiX"), ("k.hbmat", "Harwell-Boeing"),
+                                            ("k.mat", "MATLAB"), ("k.pch", "Nastran DMIG")])
+def test_reduce_of_a_bare_export_names_the_route_that_takes_it(run_cli, tmp_path, name, code):
+    """``slipcycle reduce`` imports bare ``.mtx``/``.npz`` files only: another code's export
+    given bare is refused in one line naming the model-file route (it used to be read as a
+    TOML model and blamed on its syntax), and nothing is written."""
+    export = tmp_path / name
+    export.write_text("1 1 1.0\n")
+    code_, out, err = run_cli("reduce", export, "--out", tmp_path / "red.npz")
+    assert code_ == 2
+    assert len(err.strip().splitlines()) == 1
+    assert code in err and 'model = "fe_import"' in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_an_unknown_export_format_names_the_case_files_format_key(tmp_path):
+    from slipcycle.io.fe_formats import StiffnessError, detect_format
+
+    path = tmp_path / "k.xyz"
+    path.write_text("no header here\n")
+    with pytest.raises(StiffnessError, match="stiffness table's `format` key"):
+        detect_format(path)

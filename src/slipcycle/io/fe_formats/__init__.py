@@ -61,8 +61,9 @@ def detect_format(path: str | Path) -> str:
         return fmt
     if path.suffix.lower() in _SUFFIX:
         return _SUFFIX[path.suffix.lower()]
-    raise file_error(path, "unknown stiffness file format; give it with the format key ("
-                     + ", ".join(FORMATS) + ")")
+    raise file_error(path, "unknown stiffness file format (neither its first bytes nor its "
+                     "suffix tell); in a case file name it with the stiffness table's "
+                     "`format` key (" + ", ".join(FORMATS) + ")")
 
 
 def read_raw(path: Path, fmt: str, keys: dict | None) -> RawMatrix:
