@@ -217,6 +217,9 @@ def _lap_joint_cases() -> list[Bad]:
         "friction-negative": ("friction = 0.3", "friction = -0.3", "lap_joint.friction"),
         "rtol-one": ("rtol = 0.05", "rtol = 1.5", "lap_joint.convergence.rtol"),
         "cycles-zero": ("cycles = 30", "cycles = 0", "run.cycles"),
+        # below round-off the step control would subdivide without end (it hung)
+        "step-tolerance-1e-300": ("step_tolerance = 1e-4", "step_tolerance = 1e-300",
+                                  "run.step_tolerance"),
     }
     return [Bad(f"lap-joint-{k}", ("run", "case.toml", OUT), names,
                 {"case.toml": _with(LAP, old, new)}) for k, (old, new, names) in values.items()

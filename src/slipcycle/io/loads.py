@@ -236,5 +236,5 @@ def step_tolerance(rn: Section, key: str = "step_tolerance", default: float = 1e
         raise rn.error(key, f"must be >= {MIN_STEP_TOLERANCE:g}, got {tol:g}: the error "
                             "estimate of a step is itself round-off (about 1e-16 of the "
                             "state, amplified by the Newton solves) below that, so the step "
-                            "control would subdivide without end; the default is 1e-7")
+                            f"control would subdivide without end; the default is {default:g}")
     return tol

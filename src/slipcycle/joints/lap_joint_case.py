@@ -40,6 +40,7 @@ import numpy as np
 from slipcycle.errors import InputError
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.io.case import read_steady_tol
+from slipcycle.io.loads import step_tolerance
 from slipcycle.joints.lap_joint_protocol import (
     STANDARD_PROTOCOLS,
     STEP_ACTIONS,
@@ -317,7 +318,7 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
            "steps_per_cycle": rn.int("steps_per_cycle", 40, ge=4),
            "tol": read_steady_tol(rn, 1e-8),
            "min_cycles": rn.int("min_cycles", 1, ge=1),
-           "step_tol": rn.float("step_tolerance", 1e-4, gt=0.0, lt=1.0),
+           "step_tol": step_tolerance(rn, default=1e-4),
            "replay": rn.bool("replay", False)}
     difference_tol = rn.float("difference_tol", 1e-3, gt=0.0, lt=1.0)
     out = case.section("output", required=False)
