@@ -17,7 +17,7 @@ demo: $(STAMP)
 	@echo "Report: demo-report/report.md"
 
 test: $(STAMP) ccx
-	$(PY) -m pytest -n 2 -q
+	$(PY) -m pytest -n 2 --dist worksteal -q
 
 # CalculiX (ccx 2.20, Debian/Ubuntu calculix-ccx) for the tests that run it, installed where
 # the package manager can (as root, or with password-less sudo); never fails: without it
