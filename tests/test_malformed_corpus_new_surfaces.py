@@ -19,9 +19,7 @@ import re
 from pathlib import Path
 
 import pytest
-from test_malformed_inputs import Bad, _assignments, _replace_line, _typo
-
-from slipcycle.cli.main import main
+from test_malformed_inputs import Bad, _assignments, _replace_line, _typo, refused_in_one_line
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "slipcycle" / "examples"
 OUT = "--out=out"
@@ -268,26 +266,7 @@ def _path_cases() -> list[Bad]:
 CORPUS = (_discrete3d_cases() + _topography_cases() + _lap_joint_cases() + _path_cases())
 
 
-def _listing(root: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(root)): (p.read_bytes() if p.is_file() else b"")
-            for p in root.rglob("*")}
-
-
-def _run(argv, tmp_path, monkeypatch, capsys):
-    before = _listing(tmp_path)
-    monkeypatch.chdir(tmp_path)
-    try:
-        code = main(list(argv))
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    captured = capsys.readouterr()
-    err_lines = [line for line in captured.err.splitlines() if line.strip()]
-    assert "Traceback" not in captured.err + captured.out
-    assert code == 2, captured.err
-    assert len(err_lines) == 1, captured.err
-    assert err_lines[0].startswith("error: "), err_lines[0]
-    assert _listing(tmp_path) == before, "output left behind or an input changed"
-    return err_lines[0]
+_run = refused_in_one_line
 
 
 def _write(files: dict, root: Path) -> None:

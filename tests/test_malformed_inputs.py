@@ -305,8 +305,29 @@ def _value_cases() -> list[Bad]:
 CORPUS = _generated() + _file_cases() + _output_cases() + _value_cases()
 
 
-def _listing(root: Path) -> set[str]:
-    return {str(p.relative_to(root)) for p in root.rglob("*")}
+def _listing(root: Path) -> dict[str, bytes]:
+    """Every path under ``root`` with its bytes: a new file or a changed input shows."""
+    return {str(p.relative_to(root)): (p.read_bytes() if p.is_file() else b"")
+            for p in root.rglob("*")}
+
+
+def refused_in_one_line(argv, tmp_path, monkeypatch, capsys) -> str:
+    """Run the CLI in ``tmp_path``: exit 2, one ``error:`` line, no traceback, nothing
+    written and no input changed. Returns the line."""
+    before = _listing(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    captured = capsys.readouterr()
+    err_lines = [line for line in captured.err.splitlines() if line.strip()]
+    assert "Traceback" not in captured.err + captured.out
+    assert code == 2, captured.err
+    assert len(err_lines) == 1, captured.err
+    assert err_lines[0].startswith("error: "), err_lines[0]
+    assert _listing(tmp_path) == before, "output left behind or an input changed"
+    return err_lines[0]
 
 
 def test_corpus_has_at_least_150_cases_with_unique_ids():
@@ -325,17 +346,5 @@ def test_malformed_input_is_one_line_exit_2_and_leaves_nothing(bad, tmp_path, mo
             path.write_bytes(content)
         else:
             path.write_text(content, encoding="utf-8")
-    before = _listing(tmp_path)
-    monkeypatch.chdir(tmp_path)
-    try:
-        code = main(list(bad.argv))
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    captured = capsys.readouterr()
-    err_lines = [line for line in captured.err.splitlines() if line.strip()]
-    assert "Traceback" not in captured.err + captured.out
-    assert code == 2, captured.err
-    assert len(err_lines) == 1, captured.err
-    assert err_lines[0].startswith("error: "), err_lines[0]
-    assert bad.names in err_lines[0], err_lines[0]
-    assert _listing(tmp_path) == before, "output left behind"
+    line = refused_in_one_line(bad.argv, tmp_path, monkeypatch, capsys)
+    assert bad.names in line, line
