@@ -266,8 +266,8 @@ def test_an_export_cut_anywhere_is_refused_or_reads_the_same(name, where, tmp_pa
     assert red.C.shape == full.C.shape
 
 
-@pytest.mark.parametrize(("name", "code"), [("job.sti", "CalculiX"), ("k.hbmat", "Harwell-Boeing"),
-                                            ("k.mat", "MATLAB"), ("k.pch", "Nastran DMIG")])
+@pytest.mark.parametrize(("name", "code"), [("job.sti", "calculix"), ("k.hbmat", "harwell-boeing"),
+                                            ("k.mat", "matlab"), ("k.pch", "nastran-dmig")])
 def test_reduce_of_a_bare_export_names_the_route_that_takes_it(run_cli, tmp_path, name, code):
     """``slipcycle reduce`` imports bare ``.mtx``/``.npz`` files only: another code's export
     given bare is refused in one line naming the model-file route (it used to be read as a

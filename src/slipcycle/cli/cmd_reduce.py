@@ -16,13 +16,6 @@ import argparse
 import json
 from pathlib import Path
 
-#: exports of other FE codes that ``reduce`` takes only through a model or case file
-EXPORT_SUFFIXES = {".sti": "CalculiX", ".dof": "CalculiX", ".hb": "Harwell-Boeing",
-                   ".rsa": "Harwell-Boeing", ".rua": "Harwell-Boeing",
-                   ".hbmat": "Harwell-Boeing", ".matrix": "Harwell-Boeing",
-                   ".mat": "MATLAB", ".pch": "Nastran DMIG", ".bdf": "Nastran DMIG",
-                   ".nas": "Nastran DMIG", ".blk": "Nastran DMIG", ".dmig": "Nastran DMIG"}
-
 
 def add_parser(sub) -> None:
     p = sub.add_parser("reduce", help="reduce a finite-element model (or import reduced "
@@ -42,6 +35,7 @@ def execute(args: argparse.Namespace) -> int:
     from slipcycle.fe.files import import_stiffness, reduce_model
     from slipcycle.fe_import import is_import_model, reduce_import
     from slipcycle.io import CaseError
+    from slipcycle.io.fe_formats import SUFFIX_FORMATS
     from slipcycle.io.results import to_jsonable
 
     if args.model.suffix.lower() not in (".mtx", ".npz") and is_import_model(args.model):
@@ -56,11 +50,12 @@ def execute(args: argparse.Namespace) -> int:
                   f"{', '.join(Path(w).name for w in info['written'])}")
         return 0
     suffix = args.model.suffix.lower()
-    if suffix in EXPORT_SUFFIXES:
-        raise CaseError(str(args.model), f"a {EXPORT_SUFFIXES[suffix]} stiffness export is "
-                        "reduced through a model file (model = \"fe_import\", naming it and "
-                        "its mesh: docs/from_fe_code.md) or named as stiffness_file in a "
-                        "discrete or discrete3d case")
+    fmt = SUFFIX_FORMATS.get(suffix)
+    if fmt not in (None, "npz"):
+        raise CaseError(str(args.model), f"a {fmt} stiffness export is reduced through a "
+                        "model file (model = \"fe_import\", naming it and its mesh: "
+                        "docs/from_fe_code.md) or named as stiffness_file in a discrete or "
+                        "discrete3d case")
     if args.out.suffix.lower() != ".npz":
         raise CaseError("--out", f"must name an .npz file, got {args.out}")
     if suffix in (".mtx", ".npz"):

@@ -31,12 +31,13 @@ from slipcycle.io.fe_formats import abaqus, harwell_boeing, matlab, nastran
 from slipcycle.io.fe_formats.common import RawMatrix, StiffnessError, file_error
 from slipcycle.io.sniff import sniff_format
 
-__all__ = ["FORMATS", "detect_format", "read_raw", "RawMatrix", "StiffnessError"]
+__all__ = ["FORMATS", "SUFFIX_FORMATS", "detect_format", "read_raw", "RawMatrix", "StiffnessError"]
 
 FORMATS = ("npz", "matrix-market", "abaqus", "calculix", "harwell-boeing", "matlab",
            "nastran-dmig")
 
-_SUFFIX = {".npz": "npz", ".mat": "matlab", ".sti": "calculix", ".hb": "harwell-boeing",
+#: the format a file suffix names, where its first bytes do not tell
+SUFFIX_FORMATS = {".npz": "npz", ".mat": "matlab", ".sti": "calculix", ".hb": "harwell-boeing",
            ".rsa": "harwell-boeing", ".rua": "harwell-boeing", ".hbmat": "harwell-boeing",
            ".pch": "nastran-dmig", ".bdf": "nastran-dmig", ".nas": "nastran-dmig",
            ".blk": "nastran-dmig", ".dmig": "nastran-dmig"}
@@ -59,8 +60,8 @@ def detect_format(path: str | Path) -> str:
     fmt = sniff_format(head, path.suffix)
     if fmt is not None:
         return fmt
-    if path.suffix.lower() in _SUFFIX:
-        return _SUFFIX[path.suffix.lower()]
+    if path.suffix.lower() in SUFFIX_FORMATS:
+        return SUFFIX_FORMATS[path.suffix.lower()]
     raise file_error(path, "unknown stiffness file format (neither its first bytes nor its "
                      "suffix tell); in a case file name it with the stiffness table's "
                      "`format` key (" + ", ".join(FORMATS) + ")")
