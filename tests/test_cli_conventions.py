@@ -103,7 +103,7 @@ def test_examples_lists_every_shipped_case(run_cli):
 
 def test_examples_copy_gives_cases_that_run(run_cli, tmp_path):
     code, out, _ = run_cli("examples", "halfspace_sphere", "--copy", tmp_path / "cases")
-    assert code == 0 and "1 example case files copied" in out
+    assert code == 0 and out.strip() == f"1 example case file copied to {tmp_path / 'cases'}/"
     copied = tmp_path / "cases" / "halfspace_sphere.toml"
     assert copied.read_text() == example_text("halfspace_sphere")
     # a second copy refuses to overwrite the user's edits, in one line
@@ -114,6 +114,23 @@ def test_examples_copy_gives_cases_that_run(run_cli, tmp_path):
     assert sorted(p.stem for p in (tmp_path / "cases").glob("*.toml")) == list_examples()
     code, _, err = run_cli("examples", "no_such_example")
     assert code == 2 and "no_such_example" in err and err.count("\n") == 1
+
+
+def test_examples_copy_counts_cases_apart_from_the_data_files_they_read(run_cli, tmp_path):
+    """The CalculiX example is one case that reads a mesh deck (.inp): one case file, one
+    data file; copying every example counts the .toml files as cases, nothing else."""
+    code, out, _ = run_cli("examples", "calculix_block", "--copy", tmp_path / "one")
+    assert code == 0
+    assert out.strip() == (f"1 example case file and 1 data file they read "
+                           f"(calculix_block.inp) copied to {tmp_path / 'one'}/")
+    assert sorted(p.name for p in (tmp_path / "one").iterdir()) == [
+        "calculix_block.inp", "calculix_block.toml"]
+    code, out, _ = run_cli("examples", "--copy", tmp_path / "all")
+    files = list((tmp_path / "all").iterdir())
+    data = sorted(p.name for p in files if p.suffix != ".toml")
+    assert code == 0 and data and len(files) > len(list_examples())
+    assert out.strip() == (f"{len(list_examples())} example case files and {len(data)} data "
+                           f"files they read ({', '.join(data)}) copied to {tmp_path / 'all'}/")
 
 
 def test_example_path_is_the_installed_file():

@@ -51,7 +51,7 @@ def execute(args: argparse.Namespace) -> int:
         except OSError as exc:
             raise CaseError(str(args.copy), f"cannot write: {exc.strerror or exc}") from None
         if not args.quiet:
-            print(f"{len(written)} example case files copied to {args.copy}/")
+            print(copied_message(written, args.copy))
         return 0
     if args.path:
         for name in names or list_examples():
@@ -66,3 +66,14 @@ def execute(args: argparse.Namespace) -> int:
               "slipcycle COMMAND NAME.toml --out OUT (OUT an .npz file for reduce of a "
               "2-D FE model)")
     return 0
+
+
+def copied_message(written: list[Path], folder: Path) -> str:
+    """The line of ``--copy``: the case files (``.toml``) counted apart from the data files
+    they read (a mesh deck, a topography, a table), which are not cases to run."""
+    cases = sum(p.suffix == ".toml" for p in written)
+    data = sorted(p.name for p in written if p.suffix != ".toml")
+    text = f"{cases} example case file{'s' * (cases != 1)}"
+    if data:
+        text += f" and {len(data)} data file{'s' * (len(data) != 1)} they read ({', '.join(data)})"
+    return f"{text} copied to {folder}/"
