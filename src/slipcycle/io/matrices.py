@@ -813,12 +813,11 @@ def read_case_stiffness(sec: Section, path: Path, tangential_dims: int) -> Reduc
     if st is not None:
         if st.has("format"):
             opts["format"] = st.string("format", choices=FORMATS)
-        dof_map = st.data.get("dof_map")
+        dof_map = st.raw("dof_map", None)
         if isinstance(dof_map, str) and dof_map not in ORDERINGS:
             opts["dof_map"] = st.path("dof_map")
         elif dof_map is not None:
             opts["dof_map"] = dof_map
-            st._used.add("dof_map")
         keys = st.table("keys", None)
         if keys is not None:
             opts["keys"] = {k: keys.string(k) for k in list(keys.data)}
