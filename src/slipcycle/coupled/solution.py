@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from slipcycle.coupled.settings import SolverStats
+from slipcycle.loading.service import service_slip_tolerance
 from slipcycle.result import SteadyState
 
 __all__ = ["CycleSolution", "CYCLE_CLASSES", "last_cycle", "slip_tolerance"]
@@ -67,7 +68,9 @@ class CycleSolution:
         ∮ |dv_j| over the last cycle [m].
     slip_tolerance : float
         Slip length [m] at or below which a node counts as stuck in the last cycle:
-        max(100 tol, 1e-9) × the displacement scale (round-off, not slip).
+        max(100 tol, 1e-9) × the elastic displacement of the service load's variation
+        over the cycle (:func:`slip_tolerance`): the class follows the service load, not
+        the preload or the state the assembly left.
     dissipation_history : list of float
         Total dissipation of each cycle [J].
     stored_energy_change : float
@@ -120,14 +123,17 @@ class CycleSolution:
         return SteadyState(self.steady_state).converged
 
 
-def slip_tolerance(tol: float, disp_scale: float, x: np.ndarray) -> float:
-    """Slip length [m] at or below which a node counts as stuck over a cycle:
-    max(100 tol, 1e-9) × max(displacement scale, max |x|) (round-off, not slip)."""
-    return max(100 * tol, 1e-9) * max(disp_scale, float(np.max(np.abs(x))))
+def slip_tolerance(tol: float, disp_scale: float, samples: np.ndarray,
+                   stiffness_scale: float) -> float:
+    """Slip length [m] at or below which a node counts as stuck over a steady cycle:
+    max(100 tol, 1e-9) × the elastic displacement of the service load's variation over
+    the cycle (:func:`~slipcycle.loading.service.service_slip_tolerance`), at least
+    1e-12 × the displacement scale."""
+    return service_slip_tolerance(tol, samples, stiffness_scale, disp_scale)
 
 
 def last_cycle(system, state: str, ratchet: np.ndarray, totals, starts: list, tol: float,
-               disp_scale: float, r_w0: np.ndarray, records: tuple | None,
+               disp_scale: float, samples: np.ndarray, records: tuple | None,
                n_theta: int) -> dict:
     """Classify the last cycle run and gather the fields of :class:`CycleSolution`.
 
@@ -146,8 +152,8 @@ def last_cycle(system, state: str, ratchet: np.ndarray, totals, starts: list, to
         Start-of-cycle states [m].
     tol, disp_scale : float
         Steady-state tolerance [1] and displacement scale [m].
-    r_w0 : (M,) array
-        Load at θ = 0 [N].
+    samples : (S, M) array
+        Load r^w at the samples of one cycle [N], the first at θ = 0.
     records : (xs, rs, ms) lists or None
         Sample histories of every cycle, if recorded.
     n_theta : int
@@ -160,7 +166,8 @@ def last_cycle(system, state: str, ratchet: np.ndarray, totals, starts: list, to
         ``theta``, ``dissipation_history``, ``force_scale`` and ``solver_stats``.
     """
     n, m = system.n_nodes, starts[-1].size
-    slip_tol = slip_tolerance(tol, disp_scale, starts[-1])
+    slip_tol = slip_tolerance(tol, disp_scale, samples, system.stiffness_scale())
+    r_w0 = samples[0]
     slipping = np.flatnonzero(totals.slip_length > slip_tol)
     separating = np.flatnonzero(totals.separated)
     stuck = np.flatnonzero((totals.slip_length <= slip_tol) & ~totals.separated)

@@ -28,6 +28,7 @@ from numba import njit, prange
 
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
+from slipcycle.loading.service import service_slip_tolerance
 
 __all__ = ["steady_state_fast", "steady_states_batch", "FAST_CODES"]
 
@@ -264,9 +265,7 @@ def steady_state_fast(system: FrictionalSystem, load: DiscreteLoad, initial_slip
         np.ascontiguousarray(system.friction, dtype=float), theta,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), v0,
         int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale)
-    xscale = max(disp_scale, float(np.max(np.abs(v), initial=0.0)))
-    slip_tol = max(100 * tol, 1e-9) * xscale
-    slipping = slen > slip_tol
+    slipping = slen > service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale)
     if code == STEADY:
         state = "shakedown" if not slipping.any() else "cyclic_slip"
     else:
@@ -330,8 +329,7 @@ def steady_states_batch(system: FrictionalSystem, load: DiscreteLoad, V0, *,
         np.ascontiguousarray(system.friction, dtype=float), theta,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), V0,
         int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale)
-    xscale = np.maximum(disp_scale, np.max(np.abs(vend), axis=1, initial=0.0))
-    slipping = slen > (max(100 * tol, 1e-9) * xscale)[:, None]
+    slipping = slen > service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale)
     states = np.array([FAST_CODES[int(c)] for c in codes], dtype=object)
     steady = codes == STEADY
     states[steady] = np.where(slipping[steady].any(axis=1), "cyclic_slip", "shakedown")

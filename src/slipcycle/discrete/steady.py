@@ -690,5 +690,5 @@ def _steady_result(system, evo, state, residual, ratchet, totals, starts, events
         residual=residual, cycles_run=len(events), theta=theta, events_per_cycle=events,
         solver_stats=SolverStats(solver=dict(evo.solver.stats), **jstats),
         dissipation_history=diss_hist, initial_state=x_init, force_scale=F,
-        **last_cycle(system, state, ratchet, totals, starts, tol, disp_scale, vals[0],
+        **last_cycle(system, state, ratchet, totals, starts, tol, disp_scale, vals,
                      records, len(theta)))

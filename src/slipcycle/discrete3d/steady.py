@@ -291,7 +291,7 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
         dissipation_history=history.dissipation, normal_work=totals.normal_work,
         solver_stats=stats, unresolved_steps=mix.unresolved,
         **last_cycle(system, run.state, run.ratchet, totals, run.starts, tol, disp_scale,
-                     vals[0], history.records(), len(theta)))
+                     vals, history.records(), len(theta)))
 
 
 class Mixing(PlainCycling):

@@ -54,8 +54,6 @@ from slipcycle.joints.lap_joint_result import (
 )
 from slipcycle.kernels.threads import single_threaded_blas
 from slipcycle.loading import HarmonicLoad
-from slipcycle.loading.service import cycle_slip_tolerance, service_displacement_scale
-from slipcycle.result import SteadyState
 
 __all__ = ["JointContact", "Protocol", "Step", "StudySettings", "STANDARD_PROTOCOLS",
            "standard_protocol", "joint_load", "protocol_states", "joint_system",
@@ -108,47 +106,6 @@ def joint_system(contact: JointContact, settings: StudySettings) -> FrictionalSy
                               accept_ill_posed=settings.accept_ill_posed)
 
 
-def service_classified(res: DiscreteResult3D, tol: float, steps_per_cycle: int
-                       ) -> DiscreteResult3D:
-    """The run with its steady cycle classified against the service cycle.
-
-    A node slips when its slip length over the steady cycle exceeds
-    :func:`~slipcycle.loading.service.cycle_slip_tolerance`: max(100 tol, 1e-9) × the
-    elastic displacement scale of the service load's variation over the cycle, not of
-    the whole load (the preload, the slip and the initial gap the assembly leaves are
-    thousands of times larger than what a small service load moves). A run of
-    ``shakedown`` or ``cyclic_slip`` is reclassified accordingly; the other classes stay.
-
-    Parameters
-    ----------
-    res : DiscreteResult3D
-    tol : float
-        Steady-state tolerance of the run [1].
-    steps_per_cycle : int
-        Load samples per cycle of the run.
-
-    Returns
-    -------
-    DiscreteResult3D
-    """
-    sol = res.solution
-    if sol.steady_state not in ("shakedown", "cyclic_slip"):
-        return res
-    _, samples = res.case.load.cycle_samples(steps_per_cycle)
-    scale = service_displacement_scale(samples, res.case.system.stiffness_scale())
-    slip_tol = cycle_slip_tolerance(tol, scale, sol.disp_scale)
-    separated = np.zeros(sol.slip_length.size, bool)
-    separated[sol.separating_nodes] = True
-    slipping = np.flatnonzero(sol.slip_length > slip_tol)
-    state = "shakedown" if slipping.size == 0 else "cyclic_slip"
-    sol = replace(sol, steady_state=state, slipping_nodes=slipping.tolist(),
-                  permanently_stuck_nodes=np.flatnonzero(
-                      (sol.slip_length <= slip_tol) & ~separated).tolist(),
-                  slip_tolerance=slip_tol)
-    return replace(res, solution=sol, steady_state=SteadyState(state),
-                   steady_state_detail=state)
-
-
 @dataclass(frozen=True)
 class ProtocolRun:
     """One protocol run: the engine's result and the bolt forces."""
@@ -197,13 +154,10 @@ def run_protocol(contact: JointContact, protocol: Protocol, settings: StudySetti
     if sol.x.shape[0] > 1:   # keep the last cycle only: the study reports nothing else
         sol = replace(sol, x=sol.x[-1:], r=sol.r[-1:], modes=sol.modes[-1:])
         res = replace(res, solution=sol)
-    res = service_classified(res, float(run["tol"]), int(run["steps_per_cycle"]))
-    sol = res.solution
     service = settings.service_amplitude * np.sin(sol.theta)
     cycle = asm.cycle_forces(sol.x[-1], service) if sol.x.shape[0] else \
         asm.bolt_force[None, :]
     return ProtocolRun(res, BoltForces(asm.bolt_force, cycle))
-
 
 
 def lap_joint_study(contacts: JointContact | Sequence[JointContact],

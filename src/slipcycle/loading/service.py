@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["service_displacement_scale", "cycle_slip_tolerance"]
+__all__ = ["service_displacement_scale", "cycle_slip_tolerance", "service_slip_tolerance"]
 
 
 def service_displacement_scale(samples: np.ndarray, stiffness_scale: float) -> float:
@@ -66,3 +66,33 @@ def cycle_slip_tolerance(tol: float, service_scale: float, disp_scale: float) ->
     float
     """
     return max(max(100 * tol, 1e-9) * service_scale, 1e-12 * disp_scale)
+
+
+def service_slip_tolerance(tol: float, samples: np.ndarray, stiffness_scale: float,
+                           disp_scale: float) -> float:
+    """The slip tolerance of a steady cycle under the load ``samples``: the one rule that
+    classifies every steady-state run (``shakedown`` / ``cyclic_slip``).
+
+    :func:`cycle_slip_tolerance` of :func:`service_displacement_scale`: a node whose slip
+    length over the cycle exceeds it slips, so that the class follows the service load
+    (and with it the dissipation, at most f p × the slip length per node), not the
+    preload or the state the assembly left.
+
+    Parameters
+    ----------
+    tol : float
+        Steady-state tolerance [1].
+    samples : (S, M) array
+        Load samples r^w(θ_s) of one cycle [N].
+    stiffness_scale : float
+        max diag K [N/m].
+    disp_scale : float
+        Displacement scale of the whole load [m].
+
+    Returns
+    -------
+    float
+        Slip length [m].
+    """
+    return cycle_slip_tolerance(tol, service_displacement_scale(samples, stiffness_scale),
+                                disp_scale)
