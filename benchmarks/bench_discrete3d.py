@@ -23,7 +23,9 @@ toward the edges, so that the edges slip and the interior sticks (fretting-like)
 
 from __future__ import annotations
 
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -105,24 +107,21 @@ def event_rows(seeds: range = range(30), steps: int = 100) -> list[dict]:
     from slipcycle.discrete3d.evolution import Evolution3D
     from slipcycle.discrete3d.model import embed_2d
 
+    # the random systems of tests/test_discrete3d_events.py (one generator for both)
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from random_systems import along_t1, random_coupled_2d
+
     worst = {True: 0.0, False: 0.0}
     count = 0
     for seed in seeds:
-        rng = np.random.default_rng(seed)
-        M = rng.normal(size=(4, 4))
-        K = M @ M.T / 4 + np.diag(rng.uniform(1.0, 2.0, 4))
-        A, B, C, f = K[:2, :2], 0.5 * K[2:, :2], K[2:, 2:], rng.uniform(0.2, 0.5, 2)
-        p0, q0 = rng.uniform(0.3, 0.8, 2), rng.normal(size=2) * 0.1
-        p1, q1 = rng.uniform(0.3, 0.9, 2), rng.uniform(0.3, 0.8, 2)
-        pph, qph = rng.uniform(0, 6, 2), rng.uniform(0, 6, 2)
+        A, B, C, f, (p0, q0, p1, q1, pph, qph) = random_coupled_2d(seed)
         r2 = simulate(FrictionalSystem(A, B, C, f),
                       DiscreteLoad.harmonic(p0, q0, p1, q1, pph, qph), cycles=60,
                       steps_per_cycle=steps, tol=1e-11)
         if not r2.separating_nodes:
             continue
         count += 1
-        t1 = lambda a: np.column_stack([a, np.zeros(2)]).ravel()  # noqa: E731
-        load3 = Load3D.harmonic(p0, t1(q0), p1, t1(q1), pph, np.repeat(qph, 2))
+        load3 = Load3D.harmonic(p0, along_t1(q0), p1, along_t1(q1), pph, np.repeat(qph, 2))
         for locate in (True, False):
             Evolution3D.locate_events = locate
             try:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
+from random_systems import along_t1, random_coupled_2d
 
 from slipcycle.discrete import DiscreteLoad, FrictionalSystem, simulate
 from slipcycle.discrete3d.evolution import Evolution3D
@@ -17,25 +18,6 @@ from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import SEPARATED, STICK, FrictionalSystem3D, embed_2d
 from slipcycle.discrete3d.steady import simulate3d
 from slipcycle.errors import InadmissibleInitialState
-
-
-def _along_t1(a):
-    z = np.zeros((np.size(a), 2))
-    z[:, 0] = a
-    return z.ravel()
-
-
-def _random_2d(seed, n=2):
-    """A random coupled 2-D system (A, B, C, f) and harmonic load parameters."""
-    rng = np.random.default_rng(seed)
-    M = rng.normal(size=(2 * n, 2 * n))
-    K = M @ M.T / (2 * n) + np.diag(rng.uniform(1.0, 2.0, 2 * n))
-    A, B, C = K[:n, :n], 0.5 * K[n:, :n], K[n:, n:]
-    f = rng.uniform(0.2, 0.5, n)
-    load = (rng.uniform(0.3, 0.8, n), rng.normal(size=n) * 0.1, rng.uniform(0.3, 0.9, n),
-            rng.uniform(0.3, 0.8, n), rng.uniform(0, 6, n), rng.uniform(0, 6, n))
-    return A, B, C, f, load
-
 
 #: the 3-D engine's local step tolerance of the 2-D comparisons: the global error of D is
 #: not bounded by the local one (at 1e-8 the 20-sample run of system 925988 is 4.9e-6 off,
@@ -45,12 +27,12 @@ STEP_TOL = 1e-10
 
 def _pair(seed, steps, slip0, step_tol=STEP_TOL, **kw):
     """The 2-D solver and the 3-D engine on the same system, loads along t1 only."""
-    A, B, C, f, (p0, q0, p1, q1, pph, qph) = _random_2d(seed)
+    A, B, C, f, (p0, q0, p1, q1, pph, qph) = random_coupled_2d(seed)
     r2 = simulate(FrictionalSystem(A, B, C, f), DiscreteLoad.harmonic(p0, q0, p1, q1, pph, qph),
                   cycles=60, steps_per_cycle=steps, tol=1e-11, initial_slip=slip0)
-    load3 = Load3D.harmonic(p0, _along_t1(q0), p1, _along_t1(q1), pph, np.repeat(qph, 2))
+    load3 = Load3D.harmonic(p0, along_t1(q0), p1, along_t1(q1), pph, np.repeat(qph, 2))
     r3 = simulate3d(embed_2d(A, B, C, f), load3, cycles=60, steps_per_cycle=steps, tol=1e-11,
-                    step_tol=step_tol, initial_slip=None if slip0 is None else _along_t1(slip0),
+                    step_tol=step_tol, initial_slip=None if slip0 is None else along_t1(slip0),
                     **kw)
     return r2, r3
 
@@ -112,10 +94,10 @@ def _cone_case():
     """Random system 21 of the 2-D comparison with a t2 load EPS × the t1 load, a quarter
     period behind: the slip directions turn (a genuine cone problem); node 1 opens,
     closes and sticks every cycle."""
-    A, B, C, f, (p0, q0, p1, q1, pph, qph) = _random_2d(21)
+    A, B, C, f, (p0, q0, p1, q1, pph, qph) = random_coupled_2d(21)
     q1v = np.column_stack([q1, EPS * q1]).ravel()
     ph = np.column_stack([qph, qph - np.pi / 2]).ravel()
-    return embed_2d(A, B, C, f), Load3D.harmonic(p0, _along_t1(q0), p1, q1v, pph, ph)
+    return embed_2d(A, B, C, f), Load3D.harmonic(p0, along_t1(q0), p1, q1v, pph, ph)
 
 
 def _one_cycle(system, load, x0, steps, **kw):

@@ -4,6 +4,7 @@ step size, and the frictional Melan theorem against the cone program for λ2."""
 
 import numpy as np
 import pytest
+from random_systems import along_t1
 
 from slipcycle.discrete import DiscreteLoad, FrictionalSystem, simulate
 from slipcycle.discrete3d.basins import basins3d, random_starts
@@ -18,13 +19,6 @@ B2 = np.array([[0.4, 0.1], [-0.2, 0.3]])
 C2 = np.array([[1.0, -0.2], [-0.2, 1.0]])
 
 
-def _along_t1(a):
-    a = np.asarray(a, float)
-    z = np.zeros((a.size, 2))
-    z[:, 0] = a
-    return z.ravel()
-
-
 @pytest.mark.parametrize("p0", [[1.0, 1.0], [0.5, 0.45]], ids=["contact", "separation"])
 def test_loads_along_one_direction_reproduce_the_exact_2d_solver(p0):
     """(a) With loads along t1 only, the cone reduces to |q| ≤ f p of the 2-D model, whose
@@ -36,7 +30,7 @@ def test_loads_along_one_direction_reproduce_the_exact_2d_solver(p0):
     r2 = simulate(FrictionalSystem(A2, B2, C2, f),
                   DiscreteLoad.harmonic(p0, q0, p1, q1, p1ph, q1ph),
                   cycles=40, steps_per_cycle=100, tol=1e-10)
-    load3 = Load3D.harmonic(p0, _along_t1(q0), p1, _along_t1(q1), p1ph,
+    load3 = Load3D.harmonic(p0, along_t1(q0), p1, along_t1(q1), p1ph,
                             np.repeat(q1ph, 2))
     r3 = simulate3d(embed_2d(A2, B2, C2, f), load3, cycles=40, steps_per_cycle=100,
                     tol=1e-10, step_tol=1e-8)
