@@ -17,6 +17,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from slipcycle.coupled.driver import ACCELERATIONS
 from slipcycle.coupled.settings import RunSettings
 from slipcycle.coupled.solution import CYCLE_CLASSES
 from slipcycle.io import Section
@@ -35,11 +36,13 @@ SHARED_UNITS = {
     "permanently_stuck_nodes": "1", "separating_nodes": "1", "separation": "1",
     "ratchet_per_cycle": "m", "memory_erased": "1", "f_crit": "1",
     "f_crit_lower_bound": "1", "friction_max": "1", "well_posed": "1", "wall_time_s": "s",
+    "certified_residual": "1", "memory_distance": "1", "dissipation_distance": "1",
 }
 
 #: every word of the categorical summary entries shared by the discrete models
 #: (position = code in sweep stores)
-SHARED_FLAGS = {"steady_state": CYCLE_CLASSES, "steady_state_class": STEADY_STATES}
+SHARED_FLAGS = {"steady_state": CYCLE_CLASSES, "steady_state_class": STEADY_STATES,
+                "acceleration": ACCELERATIONS}
 
 
 def finite_or_none(x) -> float | None:
@@ -141,6 +144,7 @@ class CoupledResult(RunResult):
             "friction_max": fmax,
             "well_posed": bool(fmax < fc.f_crit),
             "wall_time_s": self.wall_time_s,
+            **_certificate_entries(res.certificate),
         }
 
     def own_summary(self) -> dict:
@@ -152,6 +156,18 @@ class CoupledResult(RunResult):
         docs/discrete3d.md), with ``units``."""
         return {**self.shared_summary(), **self.own_summary(),
                 "units": dict(self.SUMMARY_UNITS)}
+
+
+def _certificate_entries(cert) -> dict:
+    """The summary entries of a run's certificate
+    (:class:`~slipcycle.coupled.driver.Certificate`; None where the solution has none)."""
+    if cert is None:
+        return {"acceleration": "none", "certified_residual": None,
+                "memory_distance": None, "dissipation_distance": None}
+    return {"acceleration": cert.acceleration,
+            "certified_residual": finite_or_none(cert.certified_residual),
+            "memory_distance": finite_or_none(cert.memory_distance),
+            "dissipation_distance": finite_or_none(cert.dissipation_distance)}
 
 
 def solve(result_cls: type[CoupledResult], case_cls: type, system_cls: type,

@@ -11,6 +11,18 @@ step towards the limit; :class:`PlainCycling` takes none. The 2-D model's period
 follower and slow-mode steps (:class:`slipcycle.discrete.steady.PieceSteps`) and the 3-D
 model's Anderson mixing with replay (:class:`slipcycle.discrete3d.steady.Mixing`) are
 the others.
+
+Certificate. A state reached with an accelerator's steps is accepted only after plain
+cycles from it: the loop goes on cycling without steps until a cycle reproduces its start
+within the tolerance (:func:`certify`). The run then reports the method whose steps
+shaped the state (:data:`ACCELERATIONS`), the certified residual, and estimates of how far
+the state (the stuck nodes' memory among it) and D still are from the limit of plain
+cycling continued from there: the rest of the geometric creep of the last two plain
+increments, ρ/(1 − ρ) times the last one (:func:`~slipcycle.kernels.creep.creep_distance`;
+plain cycling's own runs report the same estimate). Where the accelerator took the state
+to another member of the set of steady states (Barber 2012, §3: the stuck nodes' memory is
+set by the history) no cycle can tell; how far that is on the benchmark systems is
+measured by the tests and bounded in docs/discrete.md and docs/discrete3d.md.
 """
 
 from __future__ import annotations
@@ -26,7 +38,12 @@ from slipcycle.coupled.settings import RunSettings
 from slipcycle.kernels.creep import creep_distance
 
 __all__ = ["CycleState", "Accelerator", "PlainCycling", "BackOff", "run_cycles", "STEADY",
-           "SKIP"]
+           "SKIP", "ACCELERATIONS", "Certificate", "certify", "certificate"]
+
+#: the words of the ``acceleration`` summary entry: the method whose steps shaped the
+#: steady state (none: plain cycling; periodic: the 2-D periodic follower; slow_modes:
+#: also the 2-D slow-mode steps; anderson: the 3-D Anderson mixing)
+ACCELERATIONS = ("none", "periodic", "slow_modes", "anderson")
 
 #: verdicts of :meth:`Accelerator.judge` and :meth:`Accelerator.step`: the state is
 #: steady (the loop ends), or the rest of this cycle's tests is skipped
@@ -132,6 +149,15 @@ class Accelerator:
     def step(self, run: CycleState) -> str | None:
         """Take a step towards the limit (or not); :data:`STEADY` ends the run."""
         return None
+
+    @property
+    def method(self) -> str:
+        """The word (:data:`ACCELERATIONS`) of the steps that shaped the current state."""
+        return "none"
+
+    def certifying(self, run: CycleState) -> None:
+        """The plain cycles of the certificate follow (:func:`certify`): record nothing
+        for steps."""
 
 
 class PlainCycling(Accelerator):
@@ -250,4 +276,72 @@ def run_cycles(run: CycleState, theta: np.ndarray, vals: np.ndarray,
             break
     if run.state == "not_converged" and run.increment_steady:
         run.state = "steady"      # the cycles ran out after the increment test
+    if run.state == "steady" and accelerator.method != "none":
+        certify(run, theta, vals, accelerator, progress)
     return run
+
+
+def certify(run: CycleState, theta: np.ndarray, vals: np.ndarray, accelerator: Accelerator,
+            progress: Callable[[float, float], None] | None = None) -> CycleState:
+    """Plain cycles from an accelerated steady state until one reproduces its start within
+    the tolerance (at least one; within the cycles left): the state stays ``"steady"``,
+    else becomes ``"not_converged"`` with the last plain residual. The accelerator books
+    each cycle (:meth:`Accelerator.after_cycle`) but takes no step."""
+    evo, history, cycles = run.evo, run.history, run.settings.cycles
+    accelerator.certifying(run)
+    run.state = "not_converged"
+    for c in range(run.c + 1, cycles + 1):
+        # one cycle beyond ``cycles`` at most: the certificate of a state reached in the
+        # last cycle allowed
+        run.c = c
+        run.totals = evo.follow(theta, vals, record=history.record)
+        evo.resync()
+        if progress is not None:
+            progress(min(c + 1, cycles), cycles)
+        history.add(evo.x, run.totals)
+        accelerator.after_cycle(run)
+        run.d1, run.xscale, run.residual = history.increment()
+        if run.residual <= run.settings.tol:
+            run.state = "steady"
+            break
+    return run
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """What a steady-state run reports on how its state was reached (module docstring).
+
+    Attributes
+    ----------
+    acceleration : str
+        The method whose steps shaped the state (:data:`ACCELERATIONS`).
+    certified_residual : float
+        max |Φ(x) − x| / scale of the last (plain) cycle [1].
+    memory_distance : float
+        Estimated distance of the state (the stuck nodes' slips among it) from the limit
+        of plain cycling continued from it, relative to the displacement scale [1]:
+        ρ/(1 − ρ) times the last increment (ρ the ratio of the last two plain increments;
+        the last increment where they do not shrink).
+    dissipation_distance : float
+        Estimated distance of D from that limit, relative to |D| [1]: the last change of
+        D times max(1, ρ/(1 − ρ)).
+    """
+
+    acceleration: str
+    certified_residual: float
+    memory_distance: float
+    dissipation_distance: float
+
+
+def certificate(run: CycleState, accelerator: Accelerator) -> Certificate:
+    """The :class:`Certificate` of a finished run (its last three starts and D's)."""
+    starts, dis = run.history.starts, run.history.dissipation
+    res = run.residual
+    if not np.isfinite(res) or len(starts) < 2:
+        return Certificate(accelerator.method, float(res), np.inf, np.inf)
+    near = creep_distance(starts[-3:], res, run.xscale)
+    factor = near / res if res > 0 else 1.0
+    d_last = abs(dis[-1]) if dis else 0.0
+    change = abs(dis[-1] - dis[-2]) if len(dis) >= 2 else np.inf
+    d_dist = 0.0 if change == 0.0 else change * factor / d_last if d_last > 0 else np.inf
+    return Certificate(accelerator.method, float(res), float(near), float(d_dist))

@@ -40,6 +40,15 @@ class RunSettings(Mapping):
         None for the exact 2-D engine, which has no step control).
     replay : bool or None
         3-D: freeze and replay the step control's subdivision (default False; None in 2-D).
+    accelerate : bool or None
+        The accelerated steady state with its certificate (``True``), plain cycling
+        (``False``), or (None, the default) the steady-state driver's rule of where the
+        accelerators pay (:mod:`slipcycle.coupled.driver`).
+
+    Raises
+    ------
+    TypeError
+        ``accelerate`` that is neither a bool nor None (named ``run.accelerate``).
     """
 
     cycles: int = 40
@@ -48,6 +57,11 @@ class RunSettings(Mapping):
     min_cycles: int = 1
     step_tol: float | None = None
     replay: bool | None = None
+    accelerate: bool | None = None
+
+    def __post_init__(self):
+        if self.accelerate is not None and not isinstance(self.accelerate, bool):
+            raise TypeError(f"run.accelerate: must be true or false, got {self.accelerate!r}")
 
     @classmethod
     def of(cls, run: Mapping | None, defaults: RunSettings) -> RunSettings:

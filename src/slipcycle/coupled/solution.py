@@ -11,6 +11,7 @@ stuck, ``ratcheting`` when the state drifts by the same amount every cycle, and
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -77,6 +78,10 @@ class CycleSolution:
         Change of ½ xᵀKx + r^wᵀx over the last cycle [J].
     solver_stats : SolverStats
         What the run did (accelerators, step solver).
+    certificate : Certificate or None
+        The method that shaped the state, its certified residual and the estimated
+        distances of the state and of D from plain cycling's limit
+        (:class:`~slipcycle.coupled.driver.Certificate`).
     """
 
     steady_state: str
@@ -101,6 +106,7 @@ class CycleSolution:
     dissipation_history: list = field(default_factory=list)
     stored_energy_change: float = 0.0
     solver_stats: SolverStats = field(default_factory=SolverStats)
+    certificate: Any = None
 
     @property
     def dissipation_per_cycle(self) -> float:

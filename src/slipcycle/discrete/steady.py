@@ -39,6 +39,7 @@ from slipcycle.coupled.driver import (
     BackOff,
     CycleState,
     PlainCycling,
+    certificate,
     run_cycles,
 )
 from slipcycle.coupled.settings import RunSettings, SolverStats
@@ -63,7 +64,7 @@ from slipcycle.kernels.creep import creep_distance
 from slipcycle.result import STEADY_STATES
 
 __all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
-           "STEADY_CLASSES", "STEADY_CODES", "ACCELERATE_MIN_NODES"]
+           "STEADY_CLASSES", "STEADY_CODES", "ACCELERATE_MIN_NODES", "SLOW_MIN_NODES"]
 
 #: the classes :func:`simulate` ends in (:data:`slipcycle.coupled.solution.CYCLE_CLASSES`)
 STEADY_CLASSES = CYCLE_CLASSES
@@ -76,6 +77,13 @@ STEADY_CODES = STEADY_STATES
 #: smaller ones cycle plainly: a cycle costs them little, and their cycle counts are the
 #: reference numbers quoted for the examples
 ACCELERATE_MIN_NODES = 16
+
+#: smallest system whose accelerated run takes slow-mode steps by default
+#: (``simulate(slow_modes=None)``): FE-reduced blocks of hundreds of nodes creep over
+#: thousands of cycles that the follower cannot skip (their piece of the cycle map changes
+#: every cycle), while on small random systems a step may carry a node past its stop
+#: (``test_discrete_slow_modes.py``) and a cycle costs little
+SLOW_MIN_NODES = 100
 
 #: periodic-state steps refused by their checking cycle before a run stops trying
 MAX_PERIODIC_REJECTIONS = 5
@@ -358,7 +366,8 @@ def initial_state(system: FrictionalSystem, r_w: np.ndarray, v0: np.ndarray,
 def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
              steps_per_cycle: int = 100, initial_slip: np.ndarray | None = None,
              protocol: np.ndarray | None = None, tol: float = 1e-8, min_cycles: int = 1,
-             record: bool = True, accelerate: bool | None = None, slow_modes: bool = False,
+             record: bool = True, accelerate: bool | None = None,
+             slow_modes: bool | None = None,
              progress: Callable[[float, float], None] | None = None) -> SteadyResult:
     """Run load cycles to the steady state.
 
@@ -392,20 +401,23 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     accelerate : bool, optional
         Step to the periodic state once two consecutive cycles share one sequence of modes
         and events (:mod:`~slipcycle.discrete.periodic`), then check it by an exact cycle;
-        ``False``: plain cycling. Default (None): on for N ≥ :data:`ACCELERATE_MIN_NODES`.
-        Where the attempts keep finding no step they back off
-        (:data:`ATTEMPTS_BEFORE_WAIT`, :data:`MAX_ATTEMPT_WAIT`).
-    slow_modes : bool
+        a state reached with steps is certified by plain cycles from it that reproduce
+        their start within ``tol`` (:func:`~slipcycle.coupled.driver.certify`; the result's
+        ``certificate``). ``False``: plain cycling. Default (None): on for N ≥
+        :data:`ACCELERATE_MIN_NODES`. Where the attempts keep finding no step they back
+        off (:data:`ATTEMPTS_BEFORE_WAIT`, :data:`MAX_ATTEMPT_WAIT`).
+    slow_modes : bool, optional
         With the steps on: where no step has been found for :data:`SLOW_AFTER` cycles
         (the piece of the cycle map changes every cycle), also step along the slow modes
         of the cycle's Jacobian, each step ending where the first node stops
         (:func:`_slow_mode_target`); a residual below ``tol`` is then steady only when
         the slow modes' remaining distance is too. Steps are taken only where the
-        last increment kept at least :data:`SLOW_CREEP` of the one before. Off by
-        default: a node that stops or starts to slip during such a step is not seen, so
-        the stuck nodes' memory is plain cycling's only approximately (on the 401-node
-        FE block, to 1e-6 of the state, and D to 1e-6; on a random 4-node system with
-        steps allowed after the first cycle, D 7.3e-4 off).
+        last increment kept at least :data:`SLOW_CREEP` of the one before. Default
+        (None): on for N ≥ :data:`SLOW_MIN_NODES`. A node that stops or starts to slip
+        during such a step is not seen, so the stuck nodes' memory is plain cycling's
+        only approximately (on the 401-node FE block at ``tol`` 1e-11, to 1e-6 of the
+        state, and D to 1e-6; on a random 4-node system with steps allowed after the
+        first cycle, D 7.3e-4 off): small systems take none by default.
     progress : callable, optional
         ``progress(cycles_done, cycles)``, called after each cycle (a progress bar); the run
         may stop before ``cycles`` at its steady state.
@@ -422,12 +434,15 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     run = CycleState(system, evo, settings, CycleHistory(disp_scale, record, [evo.x.copy()]),
                      vals[0], F)
     accel = (system.n_nodes >= ACCELERATE_MIN_NODES) if accelerate is None else bool(accelerate)
-    steps = PieceSteps(accel, slow_modes)
+    slow = system.n_nodes >= SLOW_MIN_NODES if slow_modes is None else bool(slow_modes)
+    steps = PieceSteps(accel, accel and slow)
     run_cycles(run, theta, vals, steps, progress)
-    return _steady_result(system, evo, run.state, run.residual, run.ratchet, run.totals,
-                          run.starts, steps.events, run.history.dissipation,
-                          run.history.records(), theta, vals, tol, disp_scale, F, x_init,
-                          steps.stats)
+    res = _steady_result(system, evo, run.state, run.residual, run.ratchet, run.totals,
+                         run.starts, steps.events, run.history.dissipation,
+                         run.history.records(), theta, vals, tol, disp_scale, F, x_init,
+                         steps.stats)
+    res.certificate = certificate(run, steps)
+    return res
 
 
 class PieceSteps(PlainCycling):
@@ -479,6 +494,16 @@ class PieceSteps(PlainCycling):
 
     def ratchet_test(self, run: CycleState) -> bool:
         return len(run.starts) >= 3 and len(run.starts) - 2 not in self.targets
+
+    @property
+    def method(self) -> str:
+        st = self.stats
+        if st["slow_mode_steps"] > st["slow_mode_steps_rejected"]:
+            return "slow_modes"
+        return "periodic" if st["periodic_steps"] > st["periodic_steps_rejected"] else "none"
+
+    def certifying(self, run: CycleState) -> None:
+        self.follower.record(run.evo, False)
 
     def judge(self, run: CycleState) -> str | None:
         starts, tol, totals = run.starts, run.settings.tol, run.totals

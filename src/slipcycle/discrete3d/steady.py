@@ -98,7 +98,14 @@ from scipy.optimize import nnls
 from slipcycle.coupled.anderson import anderson as _anderson
 from slipcycle.coupled.anderson import geometric as _geometric
 from slipcycle.coupled.cycles import CycleHistory, assemble, run_scales
-from slipcycle.coupled.driver import SKIP, STEADY, CycleState, PlainCycling, run_cycles
+from slipcycle.coupled.driver import (
+    SKIP,
+    STEADY,
+    CycleState,
+    PlainCycling,
+    certificate,
+    run_cycles,
+)
 from slipcycle.coupled.settings import RunSettings, SolverStats
 from slipcycle.coupled.solution import CYCLE_CLASSES, CycleSolution, last_cycle
 from slipcycle.discrete3d.evolution import Evolution3D
@@ -290,6 +297,7 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
         force_scale=F, steps_per_cycle_taken=mix.steps, refinements_per_cycle=mix.refs,
         dissipation_history=history.dissipation, normal_work=totals.normal_work,
         solver_stats=stats, unresolved_steps=mix.unresolved,
+        certificate=certificate(run, mix),
         **last_cycle(system, run.state, run.ratchet, totals, run.starts, tol, disp_scale,
                      vals, history.records(), len(theta)))
 
@@ -336,6 +344,11 @@ class Mixing(PlainCycling):
         self.res_prev = np.inf
         self.probation = None   # (state before the last jump, residuals since it)
         self.pat = None
+        self.jumped = False     # the current state comes from a jump
+
+    @property
+    def method(self) -> str:
+        return "anderson" if self.jumped else "none"
 
     def before_cycle(self, run: CycleState) -> None:
         self.replay.before_cycle(run.evo, jumping=self.best is not None)
@@ -418,6 +431,7 @@ class Mixing(PlainCycling):
             # if cycling stalled after them)
             self.undone += 1
             run.restart(self.probation[0] if stalled else best[0])
+            self.jumped = self.jumped and not stalled
             self.accelerate = self.accelerate and not stalled
             self.probation = self.best = None
             starts[-1] = evo.x.copy()
@@ -469,6 +483,7 @@ class Mixing(PlainCycling):
                 self.probation = (starts[-1].copy(), [])
             self.jumps += 1
             self.run_jumps += 1
+            self.jumped = True
             x_star[2 * n:] = np.maximum(x_star[2 * n:], 0.0)   # separations ≥ 0
             run.restart(x_star)
             starts[-1] = x_star.copy()

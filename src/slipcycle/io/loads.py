@@ -150,13 +150,15 @@ def load_cases(ld: Section, n: int, lam: float, components: int = 1,
 
 def run_settings(rn: Section, **extra) -> dict:
     """The ``[run]`` table of the discrete models: ``cycles`` (40), ``steps_per_cycle``
-    (100), ``steady_tol`` (1e-8; alias ``tolerance``) and ``min_cycles`` (1), plus
+    (100), ``steady_tol`` (1e-8; alias ``tolerance``), ``min_cycles`` (1) and ``accelerate``
+    (None when not given: the driver's rule; ``false`` plain cycling), plus
     ``extra`` settings ``name=(key, reader)`` with ``reader(section, key)``."""
     run = {
         "cycles": rn.int("cycles", 40, ge=1),
         "steps_per_cycle": rn.int("steps_per_cycle", 100, ge=1),
         "tol": read_steady_tol(rn, 1e-8),
         "min_cycles": rn.int("min_cycles", 1, ge=1),
+        "accelerate": rn.bool("accelerate") if rn.has("accelerate") else None,
     }
     for name, (key, reader) in extra.items():
         run[name] = reader(rn, key)

@@ -1,0 +1,189 @@
+"""The accelerated steady state with its certificate (``slipcycle.coupled.driver``).
+
+A state reached with an accelerator's steps is accepted only after plain cycles from it
+reproduce their start within the tolerance; the run reports the method (``acceleration``),
+the certified residual, and the estimated distances of the state and of D from plain
+cycling's limit. Checked: the certificate on cycle maps whose limit is known in closed
+form (an affine contraction), the accelerated runs against plain cycling run to 1e-11 on
+FE-reduced blocks, random systems (hypothesis) and a system with two basins, and the run
+setting ``accelerate`` through the Python API, the case file and the CLI.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from conftest import slid_block
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+from test_discrete_steady_jump import _random_case
+from test_malformed_inputs import refused_in_one_line
+from test_steady_driver import _AffineCycle
+
+import slipcycle
+from slipcycle.coupled import RunSettings
+from slipcycle.coupled.cycles import CycleHistory
+from slipcycle.coupled.driver import (
+    ACCELERATIONS,
+    STEADY,
+    CycleState,
+    PlainCycling,
+    certificate,
+    run_cycles,
+)
+from slipcycle.discrete import simulate
+from slipcycle.discrete.rate import RateProblemError
+from slipcycle.discrete.steady import InadmissibleInitialState
+
+
+class _JumpOnce(PlainCycling):
+    """An accelerator that replaces the start after the first cycle by ``target`` and
+    calls the state steady right after its checking cycle (whatever its residual)."""
+
+    def __init__(self, target):
+        super().__init__()
+        self.target, self.jumped = np.asarray(target, float), False
+
+    @property
+    def method(self) -> str:
+        return "anderson" if self.jumped else "none"
+
+    def judge(self, run):
+        return STEADY if self.jumped else None
+
+    def step(self, run):
+        if not self.jumped:
+            self.jumped = True
+            run.restart(self.target)
+            run.starts[-1] = self.target.copy()
+        return None
+
+
+def _affine_run(rho, target, cycles=60, tol=1e-8):
+    """x → ρ x + (1 − ρ) x* with x* = 1 (every component), from 0."""
+    A = np.diag(rho)
+    b = (1.0 - np.asarray(rho)) * 1.0
+    evo = _AffineCycle(A, b, np.zeros(len(rho)))
+    system = SimpleNamespace(n_nodes=len(rho) // 2)
+    run = CycleState(system, evo, RunSettings(cycles=cycles, tol=tol),
+                     CycleHistory(1.0, False, [evo.x.copy()]), np.zeros(len(rho)), 1.0)
+    acc = _JumpOnce(target)
+    run_cycles(run, np.zeros(1), np.zeros((1, len(rho))), acc)
+    return run, acc
+
+
+def test_a_jump_to_the_fixed_point_is_certified_by_one_plain_cycle():
+    """A jump onto the exact limit: one plain cycle reproduces it (residual 0), and the
+    certificate names the method and reports no distance left."""
+    run, acc = _affine_run([0.9, 0.5], [1.0, 1.0])
+    assert run.state == "steady"
+    assert len(run.starts) == 4            # x0, the jump, its checking cycle, one more
+    cert = certificate(run, acc)
+    assert cert.acceleration == "anderson" and cert.acceleration in ACCELERATIONS
+    assert cert.certified_residual == 0.0 and cert.memory_distance == 0.0
+
+
+@given(rho=st.floats(0.55, 0.98), off=st.floats(1e-6, 1e-2))
+@settings(max_examples=40, deadline=None)
+def test_a_jump_short_of_the_limit_is_cycled_plainly_until_it_repeats_within_tol(rho, off):
+    """A jump that lands ``off`` from the limit of x → ρx + (1 − ρ): plain cycles follow
+    until the increment is below the tolerance, and the certificate's distance
+    ρ/(1 − ρ)·|Δx| is the exact distance to the limit (a linear map of one rate)."""
+    tol = 1e-8
+    run, acc = _affine_run([rho, rho], [1.0 - off, 1.0 - off], cycles=2000, tol=tol)
+    assert run.state == "steady" and run.residual <= tol
+    cert = certificate(run, acc)
+    exact = float(np.max(np.abs(run.starts[-1] - 1.0)))
+    assert cert.memory_distance == pytest.approx(exact, rel=1e-6)
+    # the plain cycles ran from the jump: its distance shrank by ρ per cycle
+    k = len(run.starts) - 3
+    assert exact == pytest.approx(off * rho ** (k + 1), rel=1e-6)
+
+
+def test_a_certificate_that_the_cycles_left_cannot_give_is_not_converged():
+    run, _ = _affine_run([0.99, 0.99], [0.5, 0.5], cycles=10)
+    assert run.state == "not_converged" and run.residual > 1e-8
+
+
+def test_plain_cycling_reports_no_acceleration_and_its_own_creep_distance():
+    system, load = _random_case(7, 3, False)
+    plain = simulate(system, load, accelerate=False, cycles=400, steps_per_cycle=40,
+                     record=False, tol=1e-11)
+    cert = plain.certificate
+    assert cert.acceleration == "none"
+    assert cert.certified_residual == plain.residual <= 1e-11
+    assert cert.memory_distance >= cert.certified_residual
+
+
+def _same(fast, plain, d_rel=1e-6, x_rel=1e-6):
+    """Class and node sets identical, D within ``d_rel``, the state (the stuck nodes'
+    memory) within ``x_rel`` of the slip scale."""
+    assert fast.steady_state == plain.steady_state
+    assert fast.slipping_nodes == plain.slipping_nodes
+    assert fast.permanently_stuck_nodes == plain.permanently_stuck_nodes
+    assert fast.separating_nodes == plain.separating_nodes
+    scale = max(abs(plain.dissipation_per_cycle), plain.force_scale * plain.disp_scale)
+    assert abs(fast.dissipation_per_cycle - plain.dissipation_per_cycle) <= d_rel * scale
+    x_f, x_p = fast.cycle_start_states[-1], plain.cycle_start_states[-1]
+    slip_scale = max(plain.disp_scale, float(np.abs(x_p).max()))
+    assert np.abs(x_f - x_p).max() <= x_rel * slip_scale
+
+
+def test_fe_block_41_default_path_is_certified_and_lands_on_plain_cyclings_limit():
+    """41 contact nodes (the periodic follower by default), both runs to 1e-11."""
+    system, load, protocol = slid_block(20)
+    kw = dict(cycles=1500, steps_per_cycle=50, protocol=protocol, record=False, tol=1e-11)
+    fast = simulate(system, load, **kw)
+    plain = simulate(system, load, accelerate=False, **kw)
+    assert fast.certificate.acceleration == "periodic"
+    assert fast.certificate.certified_residual <= 1e-11
+    assert fast.cycles_run < plain.cycles_run / 2
+    _same(fast, plain)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 100_000), n=st.integers(16, 24), sep=st.booleans())
+def test_random_systems_default_path_is_certified_and_matches_plain_cycling(seed, n, sep):
+    """Random systems of 16–24 nodes (accelerated by default), both runs to 1e-11."""
+    system, load = _random_case(seed, n, sep)
+    kw = dict(cycles=400, steps_per_cycle=40, tol=1e-11, record=False)
+    try:
+        plain = simulate(system, load, accelerate=False, **kw)
+    except (InadmissibleInitialState, RateProblemError):
+        assume(False)
+    assume(plain.steady_state not in ("not_converged", "ratcheting"))
+    fast = simulate(system, load, **kw)
+    cert = fast.certificate
+    assert cert.acceleration in ("none", "periodic")
+    assert cert.certified_residual <= 1e-11
+    _same(fast, plain)
+
+
+EXAMPLE = Path(slipcycle.__file__).parent / "examples" / "discrete_two_node.toml"
+
+
+def test_accelerate_false_in_the_case_file_is_plain_cycling():
+    text = EXAMPLE.read_text()
+    assert "[run]" in text
+    plain = slipcycle.run(text.replace("[run]", "[run]\naccelerate = false"))
+    assert plain.summary()["acceleration"] == "none"
+    assert plain.case.run["accelerate"] is False
+
+
+def test_run_accelerate_that_is_not_a_bool_is_refused_in_one_line(tmp_path, monkeypatch,
+                                                                   capsys):
+    (tmp_path / "case.toml").write_text(
+        EXAMPLE.read_text().replace("[run]", "[run]\naccelerate = 1"))
+    line = refused_in_one_line(("run", "case.toml", "--out", "o"), tmp_path, monkeypatch,
+                               capsys)
+    assert "run.accelerate" in line
+
+
+def test_run_settings_refuse_an_accelerate_that_is_not_a_bool():
+    with pytest.raises(TypeError, match="run.accelerate"):
+        RunSettings(accelerate="yes")
+    assert RunSettings(accelerate=False)["accelerate"] is False
+    assert "accelerate" not in RunSettings()        # None: the driver's rule
