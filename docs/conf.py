@@ -56,6 +56,7 @@ API_PACKAGES = {
     "slipcycle.rods": "Two rods with a frictional interface",
     "slipcycle.discrete3d": "Three-dimensional frictional interfaces (the Coulomb cone)",
     "slipcycle.fe": "Static reduction of finite-element models",
+    "slipcycle.fe_import": "From a finite-element code's export to a discrete3d case",
     "slipcycle.studies": "Studies above the models (basins, shakedown, maps, limits, sweeps)",
 }
 

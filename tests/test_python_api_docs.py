@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import ast
 import importlib
 import inspect
+from pathlib import Path
 
 import pytest
 
+DOCS = Path(__file__).resolve().parent.parent / "docs"
+
 PACKAGES = ("slipcycle.halfspace", "slipcycle.discrete", "slipcycle.rods", "slipcycle.fe",
-            "slipcycle.discrete3d")
+            "slipcycle.discrete3d", "slipcycle.fe_import")
 
 
 def _public(pkg):
@@ -64,3 +68,23 @@ def test_all_lists_resolve(pkg):
     assert len(set(mod.__all__)) == len(mod.__all__)
     for name in mod.__all__:
         assert getattr(mod, name) is not None
+
+
+def _api_packages() -> dict:
+    """``API_PACKAGES`` of docs/conf.py, read without running the configuration."""
+    tree = ast.parse((DOCS / "conf.py").read_text(encoding="utf-8"))
+    for node in tree.body:
+        target = getattr(node, "target", None) or (getattr(node, "targets", None) or [None])[0]
+        if getattr(target, "id", None) == "API_PACKAGES":
+            return ast.literal_eval(node.value)
+    raise AssertionError("docs/conf.py has no API_PACKAGES")
+
+
+def test_api_reference_has_a_page_for_every_public_package():
+    """Every package checked above has an API page (docs/conf.py writes one per entry of
+    API_PACKAGES) and docs/api/index.rst links exactly those pages, each once."""
+    documented = _api_packages()
+    assert set(PACKAGES) <= set(documented)
+    index = (DOCS / "api" / "index.rst").read_text(encoding="utf-8")
+    pages = [ln.strip() for ln in index.splitlines() if ln.strip().startswith("generated/")]
+    assert sorted(pages) == sorted(f"generated/{p}" for p in documented)

@@ -31,7 +31,19 @@ OUTPUT_FILES = ("case.toml", "stiffness.npz", "report.txt")
 
 
 def is_import_model(path: str | Path) -> bool:
-    """True when the TOML file ``path`` says ``model = "fe_import"`` (read as text)."""
+    """Whether the TOML file ``path`` says ``model = "fe_import"`` (read as text).
+
+    Parameters
+    ----------
+    path : str or Path
+        A case or model file.
+
+    Returns
+    -------
+    bool
+        True for an ``fe_import`` model file; False for any other file, also an
+        unreadable or malformed one (its reader reports that).
+    """
     import tomllib
 
     try:
@@ -42,6 +54,15 @@ def is_import_model(path: str | Path) -> bool:
 
 def write_import(model: ImportModel, joint: ImportedJoint, out: str | Path) -> list[Path]:
     """Write ``case.toml``, ``stiffness.npz`` and ``report.txt`` into ``out`` (module doc).
+
+    Parameters
+    ----------
+    model : ImportModel
+        The model file read (its ``discrete`` table and provenance).
+    joint : ImportedJoint
+        Its reduction (:func:`import_joint`).
+    out : str or Path
+        The folder to write into (created; all three files or none are written).
 
     Returns
     -------
@@ -69,6 +90,13 @@ def write_import(model: ImportModel, joint: ImportedJoint, out: str | Path) -> l
 def reduce_import(path: str | Path, out: str | Path) -> dict:
     """Read the model file ``path``, reduce it and write the case into the directory
     ``out``: :func:`read_import_model`, :func:`import_joint`, :func:`write_import`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``fe_import`` model file.
+    out : str or Path
+        The folder of the written ``discrete3d`` case.
 
     Returns
     -------

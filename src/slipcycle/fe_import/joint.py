@@ -90,8 +90,18 @@ class ImportedBody:
 
 @dataclass(frozen=True, eq=False)
 class ImportedJoint:
-    """The reduced model of an import: ``reduced`` (A, B, C, coordinates, frames, load
-    cases), ``area`` (N,) tributary areas of the contact nodes, m², and ``report``."""
+    """The reduced model of an import.
+
+    Attributes
+    ----------
+    reduced : ReducedStiffness
+        A (2N, 2N), B (N, 2N), C (N, N), N/m; coordinates (N, 3), m; outward normals and
+        tangents; one load case per ``[[fe_import.load]]``.
+    area : numpy.ndarray, shape (N,)
+        Tributary area of each contact node, m².
+    report : dict
+        What was read and checked (written as ``report.txt``).
+    """
 
     reduced: ReducedStiffness
     area: np.ndarray
@@ -184,7 +194,25 @@ def _set_nodes(mesh: ImportedMesh, name: str, key: str) -> np.ndarray:
 
 
 def read_body(spec: BodySpec) -> ImportedBody:
-    """Read one body's export and mesh, its contact surface and its checks."""
+    """Read one body's export and mesh, its contact surface and its checks.
+
+    Parameters
+    ----------
+    spec : BodySpec
+        The body's files, sets and units.
+
+    Returns
+    -------
+    ImportedBody
+        The stiffness in N/m on the mesh's nodes (dofs the export lacks held at 0), the
+        contact faces and nodes.
+
+    Raises
+    ------
+    CaseError
+        Naming the body's key: an unreadable export or mesh, an export of another mesh,
+        a missing set or surface.
+    """
     length, stiff = UNITS[spec.units]
     mesh = read_mesh(spec.mesh, f"{spec.key}.mesh", length)
     raw, K, fmt = _read_export(spec)
@@ -297,6 +325,11 @@ def _cases(model: ImportModel, bodies, offsets, n_all: int, fixed: np.ndarray) -
 
 def import_joint(model: ImportModel) -> ImportedJoint:
     """Reduce the bodies of ``model`` to their contact (module docstring).
+
+    Parameters
+    ----------
+    model : ImportModel
+        A checked model file (:func:`read_import_model`).
 
     Returns
     -------

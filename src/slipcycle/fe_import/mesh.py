@@ -320,6 +320,20 @@ def _faceset(points, conn, rows, local, kind) -> FaceSet:
 def read_mesh(path: Path, key: str, scale: float = 1.0) -> ImportedMesh:
     """The mesh of ``path``: a deck (``.inp``) or any file meshio reads (module docstring).
 
+    Parameters
+    ----------
+    path : Path
+        The mesh file.
+    key : str
+        The model-file key that names it, for error messages.
+    scale : float
+        Metres per length unit of the file.
+
+    Returns
+    -------
+    ImportedMesh
+        Node labels, coordinates (m), solid cells, node sets and surfaces.
+
     Raises
     ------
     CaseError

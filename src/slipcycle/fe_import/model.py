@@ -47,7 +47,25 @@ UNITS = {"m": (1.0, 1.0), "mm": (1e-3, 1e3)}
 
 @dataclass(frozen=True)
 class BodySpec:
-    """One body: its export, its mesh and its named sets (keys for the messages)."""
+    """One body: its export, its mesh and its named sets (keys for the messages).
+
+    Attributes
+    ----------
+    stiffness : Path
+        The stiffness export (a format of :mod:`slipcycle.io.fe_formats`).
+    mesh : Path
+        The mesh: the deck (``.inp``) or any file meshio reads.
+    contact : str
+        Name of the contact surface (a surface or node set of the mesh).
+    clamped : tuple of str
+        Node sets held at zero displacement.
+    units : str
+        ``"m"`` (m, N, Pa) or ``"mm"`` (mm, N, MPa: K in N/mm), see :data:`UNITS`.
+    format : str or None
+        The export's format word; None: recognised from the file.
+    key : str
+        The model-file table of this body, named in error messages.
+    """
 
     stiffness: Path
     mesh: Path
@@ -62,7 +80,23 @@ class BodySpec:
 class LoadSpec:
     """One load case: ``kind`` ``displacement`` (m) or ``force`` (N per node) of the node
     set ``target``, or ``pressure`` (Pa) on the surface ``target``, of body ``body`` (0 or
-    1)."""
+    1).
+
+    Attributes
+    ----------
+    name : str
+        Name of the load case in the written case (a plain word other than ``gap``).
+    kind : str
+        ``"displacement"``, ``"force"`` or ``"pressure"``.
+    target : str
+        The node set (displacement, force) or surface (pressure) loaded.
+    value : numpy.ndarray, shape (3,) or ()
+        Displacement (m) or force per node (N) along x, y, z; or the pressure (Pa).
+    body : int
+        Index of the loaded body (0 or 1).
+    key : str
+        The model-file table of this load, named in error messages.
+    """
 
     name: str
     kind: str
@@ -74,7 +108,23 @@ class LoadSpec:
 
 @dataclass(frozen=True, eq=False)
 class ImportModel:
-    """A checked model file: bodies, loads, matching tolerance (m), the ``discrete`` table."""
+    """A checked model file: bodies, loads, matching tolerance (m), the ``discrete`` table.
+
+    Attributes
+    ----------
+    bodies : tuple of BodySpec
+        One or two bodies.
+    loads : tuple of LoadSpec
+        The load cases.
+    tolerance : float
+        Distance (m) within which the contact nodes of two bodies are matched in pairs.
+    discrete : dict
+        The ``[fe_import.discrete]`` table, copied into the written ``discrete3d`` case.
+    text : str
+        The model file's text (for the provenance of the written files).
+    path : Path or None
+        The model file.
+    """
 
     bodies: tuple
     loads: tuple
@@ -85,8 +135,7 @@ class ImportModel:
 
 
 def _names(sec: Section, key: str) -> tuple:
-    raw = sec.data.get(key, [])
-    sec._used.add(key)
+    raw = sec.raw(key, [])
     if isinstance(raw, str):
         raw = [raw]
     if not isinstance(raw, list) or not all(isinstance(s, str) and s for s in raw):
@@ -129,6 +178,17 @@ def _load(sec: Section, n_bodies: int) -> LoadSpec:
 
 def read_import_model(path: str | Path) -> ImportModel:
     """Read and check an ``fe_import`` model file (module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML model file (``model = "fe_import"``).
+
+    Returns
+    -------
+    ImportModel
+        The bodies, loads, tolerance and ``discrete`` table, every file name resolved
+        against the model file's folder.
 
     Raises
     ------
