@@ -117,7 +117,7 @@ contact = joint_contact(joint)
 t1 = time.perf_counter()
 settings = StudySettings(preload=5e3, service_amplitude=1e3, friction=0.3,
                          run=dict(cycles=30, steps_per_cycle=20, tol=1e-6, step_tol=1e-4))
-sol = run_protocol(contact, standard_protocol("simultaneous", 2), settings).solution
+sol = run_protocol(contact, standard_protocol("simultaneous", 2), settings).result.solution
 print(json.dumps({"nodes": contact.n_nodes, "spacing": contact.spacing,
                   "build": t1 - t0, "solve": time.perf_counter() - t1,
                   "D": sol.dissipation_per_cycle, "cycles": int(sol.cycles_run)}))
