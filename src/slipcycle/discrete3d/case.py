@@ -26,6 +26,7 @@ from slipcycle.discrete3d.steady import (
     initial_state_3d,
     simulate3d,
 )
+from slipcycle.errors import CaseError, InputError
 from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, RunOutputs, Section
 from slipcycle.io.case import case_error_of
@@ -37,10 +38,11 @@ from slipcycle.io.loads import (
     step_tolerance,
 )
 from slipcycle.io.matrices import read_case_stiffness
+from slipcycle.loading.protocol import Step, read_step, step_states
 
 __all__ = ["Discrete3DCase", "DiscreteResult3D", "read_discrete3d_case", "discrete3d_case",
            "solve_case", "solve_model", "run_case", "SUMMARY_UNITS", "SUMMARY_FLAGS",
-           "RUN_DEFAULTS"]
+           "RUN_DEFAULTS", "assembly_states"]
 
 #: run settings of a case built in Python (the defaults of the ``[run]`` table)
 RUN_DEFAULTS = RunSettings(step_tol=1e-7, replay=False)
@@ -91,6 +93,38 @@ def _matrices(case: Case, sec: Section) -> tuple[dict, dict]:
              "loads": {}}, {k: sec.key(k) for k in ("A", "B", "C")})
 
 
+def _read_steps(sec: Section) -> tuple | None:
+    """``steps``: the assembly protocol as a list of steps (None if not given)."""
+    raw = sec.raw("steps", None)
+    if raw is None:
+        return None
+    if not isinstance(raw, list) or not raw:
+        raise sec.error("steps", "must be a non-empty list of steps, e.g. "
+                                 "[{tighten = [0]}, {service = 0.5}, {tighten = [1, 2]}]")
+    return tuple(read_step(sec.key(f"steps[{j}]"), item, what="node")
+                 for j, item in enumerate(raw))
+
+
+def assembly_states(steps, load: Load3D) -> np.ndarray:
+    """The load states (S, 3N) of an assembly protocol given as steps
+    (:func:`~slipcycle.loading.protocol.step_states`: nodes play the bolts, the service
+    level multiplies the tangential load at θ = 0).
+
+    Parameters
+    ----------
+    steps : sequence of Step
+    load : Load3D
+
+    Returns
+    -------
+    (S, 3N) array
+        [q^w, p^w] [N].
+    """
+    r0 = load(np.array([0.0]))[0]
+    n = r0.size // 3
+    return step_states(steps, r0[:2 * n].reshape(n, 2), r0[2 * n:])
+
+
 def read_discrete3d_case(case: Case) -> Discrete3DCase:
     """Read and validate every key of a ``discrete3d`` case; no computation beyond checks.
 
@@ -115,6 +149,10 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     coords = sec.array("coordinates", mats["coordinates"], shape=(n, 3))
     area = sec.array("area", 1.0, shape=(n,), scalar_ok=True, gt=0.0)
     init, protocol = read_start(sec, n, 2)
+    steps = _read_steps(sec)
+    if steps is not None and (init is not None or protocol is not None):
+        raise sec.error("steps", "give one of initial_slip, [[protocol]] load states or "
+                                 "steps, not two")
 
     ld = case.section("loading")
     lam = ld.float("lam", 1.0, ge=0.0)
@@ -153,6 +191,11 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
                                            "area")}, **mkeys}
         raise case_error_of(exc, keys) from None
     check_some_contact(ld, load.cycle_samples(run.steps_per_cycle)[1][:, -n:])
+    if steps is not None:
+        try:
+            protocol = assembly_states(steps, load)
+        except InputError as exc:
+            raise CaseError(sec.key(exc.key), exc.problem) from None
     if init is not None:
         r0 = load(np.array([0.0]))[0]
         F = max(float(np.max(np.abs(load.cycle_samples(run.steps_per_cycle)[1]))), 1e-300)
@@ -175,7 +218,8 @@ def discrete3d_case(system: FrictionalSystem3D, load: Load3D, run: Mapping | Non
         ``cycles``, ``steps_per_cycle``, ``tol`` (or ``tolerance``), ``min_cycles``,
         ``step_tol``; :data:`RUN_DEFAULTS` for the others.
     initial_slip : (N, 2) array, optional
-    protocol : (S, 3N) array, optional
+    protocol : (S, 3N) array or sequence of Step, optional
+        Assembly load states, or the steps that give them (:func:`assembly_states`).
     fields : tuple of str
         Field formats written by ``to_outputs`` (``"xdmf"``, ``"pvd"``).
 
@@ -183,6 +227,8 @@ def discrete3d_case(system: FrictionalSystem3D, load: Load3D, run: Mapping | Non
     -------
     Discrete3DCase
     """
+    if protocol is not None and len(protocol) and isinstance(protocol[0], Step):
+        protocol = assembly_states(protocol, load)
     return Discrete3DCase(system, load, RunSettings.of(run, RUN_DEFAULTS),
                           None if initial_slip is None else np.asarray(initial_slip, float),
                           None if protocol is None else np.asarray(protocol, float),

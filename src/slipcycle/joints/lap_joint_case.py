@@ -43,14 +43,13 @@ from slipcycle.io.case import read_steady_tol
 from slipcycle.io.loads import step_tolerance
 from slipcycle.joints.lap_joint_protocol import (
     STANDARD_PROTOCOLS,
-    STEP_ACTIONS,
     JointContact,
     Protocol,
-    Step,
     standard_protocol,
 )
 from slipcycle.joints.lap_joint_result import LapJointResult
 from slipcycle.joints.lap_joint_study import StudySettings, lap_joint_study
+from slipcycle.loading.protocol import read_step
 
 __all__ = ["LapJointCase", "read_lap_joint_case", "joint_contact", "solve_model",
            "solve_case", "run_case", "FIELD_FORMATS"]
@@ -166,54 +165,6 @@ def _order(ps: Section, key: str, raw, bolt_count: int) -> tuple:
     return tuple(steps)
 
 
-#: the keys of a step table besides its action
-_STEP_OPTIONS = ("force", "by")
-
-
-def _read_step(ps: Section, name: str, j: int, raw) -> Step:
-    """One step of ``[lap_joint.protocols.steps]``: a table with one action key."""
-    key = ps.key(f"steps.{name}[{j}]")
-    if not isinstance(raw, dict):
-        raise CaseError(key, f"a step is a table with one action ({', '.join(STEP_ACTIONS)}"
-                             f", offset), e.g. {{tighten = [0, 1]}}; got {raw!r}")
-    actions = [a for a in (*STEP_ACTIONS, "offset") if a in raw]
-    if len(actions) != 1:
-        raise CaseError(key, f"needs exactly one action of {', '.join(STEP_ACTIONS)}, "
-                             f"offset; got {sorted(raw) or 'none'}")
-    action = actions[0]
-    extra = sorted(set(raw) - {action, *_STEP_OPTIONS})
-    if extra:
-        raise CaseError(f"{key}.{extra[0]}", "unknown key")
-    value = raw[action]
-    kw = {k: raw[k] for k in _STEP_OPTIONS if k in raw}
-    allowed = {"tighten": ("force",), "loosen": ("force",), "turn": ("by",)}.get(action, ())
-    for k in kw:
-        if k not in allowed:
-            raise CaseError(f"{key}.{k}", f"a {action} step takes no {k}")
-    for k, v in kw.items():
-        if isinstance(v, bool) or not isinstance(v, int | float | list):
-            raise CaseError(f"{key}.{k}", f"must be a number (or a list), got {v!r}")
-    if action in ("tighten", "loosen", "turn"):
-        bolts = value if isinstance(value, list) else [value]
-        if not bolts or any(isinstance(b, bool) or not isinstance(b, int) for b in bolts):
-            raise CaseError(f"{key}.{action}", f"must be bolt numbers, got {value!r}")
-        kw["bolts"] = tuple(bolts)
-    elif action == "release":
-        if value is not True:
-            raise CaseError(f"{key}.release", f"must be true, got {value!r}")
-    elif isinstance(value, bool) or not isinstance(value, int | float):
-        raise CaseError(f"{key}.{action}", f"must be a number, got {value!r}")
-    elif action == "offset":
-        action, kw["offset"] = "service", float(value)
-    else:
-        kw["force"] = float(value)
-    try:
-        return Step(action, **kw)
-    except InputError as exc:
-        sub = exc.key if exc.key in raw else actions[0]
-        raise CaseError(f"{key}.{sub}", exc.problem) from None
-
-
 def _read_steps(ps: Section, names: list) -> dict:
     """``[lap_joint.protocols.steps]``: protocol name → tuple of Step."""
     steps_sec = ps.table("steps", {})
@@ -225,7 +176,8 @@ def _read_steps(ps: Section, names: list) -> dict:
         if not isinstance(raw, list) or not raw:
             raise steps_sec.error(name, "must be a non-empty list of steps, e.g. "
                                         "[{tighten = [0]}, {tighten = [1]}]")
-        out[name] = tuple(_read_step(ps, name, j, item) for j, item in enumerate(raw))
+        out[name] = tuple(read_step(ps.key(f"steps.{name}[{j}]"), item)
+                          for j, item in enumerate(raw))
     steps_sec.finish()
     return out
 

@@ -68,6 +68,7 @@ from slipcycle.errors import InputError
 from slipcycle.io.matrices import ReducedStiffness
 from slipcycle.loading import HarmonicLoad
 from slipcycle.loading.nodal import force_scale
+from slipcycle.loading.protocol import STEP_ACTIONS, Step
 
 __all__ = ["JointContact", "Step", "Protocol", "StudySettings", "STANDARD_PROTOCOLS",
            "STEP_ACTIONS",
@@ -75,10 +76,6 @@ __all__ = ["JointContact", "Step", "Protocol", "StudySettings", "STANDARD_PROTOC
 
 #: the standard tightening patterns of a row of K bolts (:func:`standard_protocol`)
 STANDARD_PROTOCOLS = ("sequential", "star", "reversed", "simultaneous")
-
-#: the step actions (module docstring)
-STEP_ACTIONS = ("tighten", "loosen", "turn", "service", "overload", "release")
-
 
 @dataclass(frozen=True)
 class JointContact:
@@ -189,100 +186,6 @@ class JointContact:
         red = replace(self.reduced, B=np.zeros_like(self.reduced.B),
                       source=f"{self.reduced.source} (B = 0)")
         return replace(self, reduced=red)
-
-
-@dataclass(frozen=True)
-class Step:
-    """One assembly step (module docstring).
-
-    Parameters
-    ----------
-    action : str
-        One of :data:`STEP_ACTIONS`.
-    bolts : tuple of int
-        The bolts of ``tighten``, ``loosen``, ``turn``.
-    force : float or tuple of float, optional
-        ``tighten``/``loosen``: target force of each listed bolt [N] (one value for all;
-        default the preload / 0). ``service``/``overload``: the service load [N].
-    by : float
-        ``turn``: shortening of the free length of each listed bolt [m].
-    offset : float, optional
-        ``service``: the grip offset [m] instead of ``force`` (converted with the grip
-        stiffness of the stuck joint).
-    """
-
-    action: str
-    bolts: tuple = ()
-    force: float | tuple | None = None
-    by: float = 0.0
-    offset: float | None = None
-
-    def __post_init__(self):
-        if self.action not in STEP_ACTIONS:
-            raise InputError("action", f"must be one of {', '.join(STEP_ACTIONS)}, got "
-                             f"{self.action!r}")
-        try:
-            bolts = tuple(int(b) for b in np.atleast_1d(self.bolts))
-        except (TypeError, ValueError):
-            raise InputError("bolts", "must be bolt numbers") from None
-        object.__setattr__(self, "bolts", bolts)
-        if self.action in ("tighten", "loosen", "turn"):
-            if not bolts or len(set(bolts)) != len(bolts):
-                raise InputError("bolts", f"{self.action} needs distinct bolt numbers, got "
-                                 f"{list(bolts)}")
-        elif bolts:
-            raise InputError("bolts", f"{self.action} takes no bolts")
-        if self.force is not None:
-            if self.action not in ("tighten", "loosen", "service", "overload"):
-                raise InputError("force", f"{self.action} takes no force")
-            f = np.atleast_1d(np.asarray(self.force, float))
-            if self.action in ("service", "overload") and f.size != 1:
-                raise InputError("force", "must be one number [N]")
-            if f.size not in (1, len(bolts)) and self.action in ("tighten", "loosen"):
-                raise InputError("force", f"must be one force or one per bolt "
-                                 f"({len(bolts)}), got {f.size}")
-            if not np.all(np.isfinite(f)) or (self.action != "service" and np.any(f < 0)):
-                sign = "" if self.action == "service" else " and ≥ 0"
-                raise InputError("force", f"must be finite{sign} N, got {f.tolist()}")
-            if self.action == "overload" and f[0] == 0:
-                raise InputError("force", "an overload needs a nonzero service load")
-            object.__setattr__(self, "force", float(f[0]) if f.size == 1 else tuple(f.tolist()))
-        if self.action == "turn" and not (np.isfinite(self.by) and self.by != 0):
-            raise InputError("by", f"a turn needs a nonzero finite shortening [m], got "
-                             f"{self.by!r}")
-        if self.action != "turn" and self.by != 0:
-            raise InputError("by", f"{self.action} takes no turn")
-        if self.offset is not None:
-            if self.action != "service" or self.force is not None:
-                raise InputError("offset", "only a service step takes an offset (instead "
-                                 "of its force)")
-            if not np.isfinite(self.offset):
-                raise InputError("offset", f"must be finite [m], got {self.offset!r}")
-        if self.action in ("service", "overload") and self.force is None \
-                and self.offset is None:
-            raise InputError("force", f"{self.action} needs its load [N]")
-
-    def targets(self, preload: float) -> np.ndarray:
-        """Target force of each listed bolt [N] (``tighten``/``loosen``)."""
-        default = preload if self.action == "tighten" else 0.0
-        f = default if self.force is None else self.force
-        return np.broadcast_to(np.asarray(f, float), (len(self.bolts),)).copy()
-
-    @property
-    def label(self) -> str:
-        """Short text: ``0+1``, ``loosen 0``, ``service 900 N`` …"""
-        if self.action == "tighten" and self.force is None:
-            return "+".join(map(str, self.bolts))
-        what = " ".join([self.action, "+".join(map(str, self.bolts))]).strip()
-        if self.action == "turn":
-            return f"{what} {self.by:g} m"
-        if self.offset is not None:
-            return f"{what} {self.offset:g} m"
-        if self.force is not None:
-            f = self.force if isinstance(self.force, float) else "/".join(
-                f"{x:g}" for x in self.force)
-            return f"{what} {f if isinstance(f, str) else format(f, 'g')} N"
-        return what
 
 
 def _as_step(item) -> Step:
