@@ -187,3 +187,34 @@ def test_run_settings_refuse_an_accelerate_that_is_not_a_bool():
         RunSettings(accelerate="yes")
     assert RunSettings(accelerate=False)["accelerate"] is False
     assert "accelerate" not in RunSettings()        # None: the driver's rule
+
+
+@pytest.mark.slow
+def test_fe_block_401_default_path_at_the_default_tolerance_lands_within_1e6_of_the_limit(
+        monkeypatch):
+    """401 contact nodes on the default path (slow-mode steps, N ≥ SLOW_MIN_NODES) at the
+    default tolerance 1e-8: the steps go on until their remaining distance is below 1e-11
+    (SLOW_SETTLED), so D and the state (the 378 stuck nodes' memory) land within 1e-6 of
+    plain cycling's limit after 2200 cycles (measured 7.9e-7 and 6.0e-7, in 124 cycles;
+    stopping the steps at the tolerance gives 100 cycles and D 1.0e-4 off), certified by
+    a plain cycle."""
+    from test_discrete_slow_modes import DATA, PLAIN_D_401
+
+    from slipcycle.discrete import steady
+
+    system, load, protocol = slid_block(200)
+    kw = dict(cycles=600, steps_per_cycle=50, protocol=protocol, record=False)
+    fast = simulate(system, load, **kw)
+    cert = fast.certificate
+    assert fast.steady_state == "cyclic_slip"
+    assert cert.acceleration == "slow_modes" and cert.certified_residual <= 1e-8
+    assert fast.cycles_run < 200
+    x, plain_x = fast.cycle_start_states[-1], np.load(DATA / "fe_block_401_plain_limit.npy")
+    assert np.abs(x - plain_x).max() <= 1e-6 * np.abs(plain_x).max()
+    assert fast.dissipation_per_cycle == pytest.approx(PLAIN_D_401, rel=1e-6, abs=0)
+    # stopped at the tolerance instead, the steps leave D far off (the reason for the
+    # tighter stop)
+    monkeypatch.setattr(steady, "SLOW_SETTLED", 1.0)
+    loose = simulate(system, load, **kw)
+    assert loose.cycles_run < fast.cycles_run
+    assert abs(loose.dissipation_per_cycle - PLAIN_D_401) > 1e-5 * PLAIN_D_401
