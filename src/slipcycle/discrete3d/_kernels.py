@@ -14,7 +14,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["add_rows", "gather_block", "classify_nodes", "active_residual"]
+__all__ = ["add_rows", "gather_block", "classify_nodes", "active_residual", "lu_solve",
+           "chord_newton", "fix_nodes", "add_at"]
 
 
 @njit(cache=True, nogil=True)
@@ -162,3 +163,153 @@ def active_residual(xU, rV, v0S, fS, rhoS, rhoP, ns, npp, R, zs, zsn):  # pragma
         if rV[k] - rhoP[i] * xU[k] > 0.0:
             changed = True
     return res, changed
+
+
+@njit(cache=True, nogil=True)
+def lu_solve(lu, piv, b):  # pragma: no cover - compiled
+    """Solve J x = b with the factors of LAPACK ``getrf`` (as
+    :func:`scipy.linalg.lapack.dgetrf` returns them: ``lu`` (m, m), unit-lower L and U
+    packed; ``piv`` (m,) zero-based row interchanges). Column-oriented, for the Fortran
+    order of ``lu``."""
+    m = b.size
+    x = b.copy()
+    for i in range(m):
+        p = piv[i]
+        if p != i:
+            t = x[i]
+            x[i] = x[p]
+            x[p] = t
+    for k in range(m):
+        xk = x[k]
+        if xk != 0.0:
+            for i in range(k + 1, m):
+                x[i] -= lu[i, k] * xk
+    for k in range(m - 1, -1, -1):
+        x[k] /= lu[k, k]
+        xk = x[k]
+        if xk != 0.0:
+            for i in range(k):
+                x[i] -= lu[i, k] * xk
+    return x
+
+
+@njit(cache=True, nogil=True)
+def _elim_step(R, ns, m, lu, piv, W, KSP, phi, nvec, fS, y):  # pragma: no cover
+    """The Newton step (m,) of the condensed system (the separated rows eliminated:
+    ``StepSolver._separated_block``); ``y`` = K_PP⁻¹ R_P, used while R_P ≠ 0 (before
+    the first step: the separated rows are linear and solved exactly by it)."""
+    s = 2 * ns
+    rhs = -R[:s]
+    ry = False
+    for k in range(s, m):
+        if R[k] != 0.0:
+            ry = True
+            break
+    if ry:
+        z = np.dot(KSP, y)                           # K_{VS,P} K_PP⁻¹ R_P
+        for i in range(ns):
+            z1, z2 = z[2 * i], z[2 * i + 1]
+            rhs[2 * i] += (z1 - phi[i, 0, 0] * z1 - phi[i, 0, 1] * z2
+                           - fS[i] * z[s + i] * nvec[i, 0])
+            rhs[2 * i + 1] += (z2 - phi[i, 1, 0] * z1 - phi[i, 1, 1] * z2
+                               - fS[i] * z[s + i] * nvec[i, 1])
+    dS = lu_solve(lu, piv, rhs)
+    delta = np.empty(m)
+    delta[:s] = dS
+    delta[s:] = -np.dot(W, dS)
+    if ry:
+        delta[s:] -= y
+    return delta
+
+
+@njit(cache=True, nogil=True)
+def chord_newton(kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, lu, piv, W, KSP,
+                 phi, nvec, y, has_lu, fresh, it, max_iter, res_prev, stepped, force_tol,
+                 chord_rate, R, zs, zsn):  # pragma: no cover - compiled
+    """Newton iterations on the active unknowns with the active set held fixed and one
+    factorised Newton matrix (chord steps): the loop of ``StepSolver._local_newton``.
+
+    ``kind`` 0: LU factors (``lu``, ``piv``) of the whole active Jacobian; 2: the
+    separated rows eliminated (``W``, ``KSP``, ``y`` = K_PP⁻¹ R_P at the start, and
+    ``lu``/``piv`` of the condensed slip Jacobian with its ``phi``, ``nvec``). The
+    iteration stops before a step that needs a new matrix (none yet, or the residual
+    fell less than ``chord_rate`` per step): the caller factorises at the current
+    iterate and calls again with ``fresh``. Dense products by BLAS (``np.dot``).
+
+    Returns
+    -------
+    status : int
+        0 converged, 1 a node of the active set changed state, 2 ``max_iter`` reached,
+        3 a new Newton matrix is needed, 4 a non-finite Newton step.
+    it, res_prev, stepped
+        The loop's counters, to resume it.
+    """
+    m = 2 * ns + 3 * npp
+    s = 2 * ns
+    while True:
+        res, changed = active_residual(xU, rV, v0S, fS, rhoS, rhoP, ns, npp, R, zs, zsn)
+        if stepped and changed:
+            return 1, it, res_prev, stepped
+        if res <= force_tol:
+            return 0, it, res_prev, stepped
+        if it >= max_iter:
+            return 2, it, res_prev, stepped
+        if not fresh and (not has_lu or res > chord_rate * res_prev):
+            return 3, it, res_prev, stepped
+        fresh = False
+        it += 1
+        if kind == 2:
+            delta = _elim_step(R, ns, m, lu, piv, W, KSP, phi, nvec, fS, y)
+        else:
+            delta = lu_solve(lu, piv, -R)
+        for k in range(m):
+            if not np.isfinite(delta[k]):
+                return 4, it, res_prev, stepped
+        res_prev = res
+        stepped = True
+        for k in range(m):
+            D[k] += delta[k]
+            xU[k] += delta[k]
+        if kind == 2:
+            # the slip rows follow K; the separated rows are solved exactly by the step
+            # (K_PS dS + K_PP dP = −R_P), so their reactions are zero
+            rV[:s] += np.dot(KVU[:s], delta)
+            rV[m:] += np.dot(KVU[m:], delta)
+            rV[s:m] = 0.0
+        else:
+            rV += np.dot(KVU, delta)
+
+
+@njit(cache=True, nogil=True)
+def fix_nodes(K, x, x0, r, fix_t, fix_n):  # pragma: no cover - compiled
+    """Set the slip increment of the flagged stuck nodes (``fix_t``) and the separation
+    of the flagged closed nodes (``fix_n``) to zero, with their reactions:
+    r += K[:, cols] δ (K symmetric: its rows), the tangential columns first."""
+    n = fix_t.size
+    cols = np.empty(3 * n, np.int64)
+    k = 0
+    for j in range(n):
+        if fix_t[j]:
+            cols[k] = 2 * j
+            cols[k + 1] = 2 * j + 1
+            k += 2
+    kt = k
+    for j in range(n):
+        if fix_n[j]:
+            cols[k] = 2 * n + j
+            k += 1
+    cols = cols[:k]
+    delta = np.empty(k)
+    for i in range(k):
+        delta[i] = x0[cols[i]] - x[cols[i]] if i < kt else -x[cols[i]]
+    for i in range(k):
+        x[cols[i]] += delta[i]
+    add_rows(K, cols, delta, r)
+
+
+@njit(cache=True, nogil=True)
+def add_at(K, cols, d, x, r):  # pragma: no cover - compiled
+    """x[cols] += d and r += K[:, cols] d (K symmetric: its rows)."""
+    for k in range(cols.size):
+        x[cols[k]] += d[k]
+    add_rows(K, cols, d, r)

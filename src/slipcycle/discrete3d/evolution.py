@@ -92,12 +92,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
-from scipy.linalg.lapack import dgetrf, dgetrs
+from scipy.linalg.lapack import dgetrf
 
 from slipcycle.discrete3d._kernels import (
     active_residual,
+    add_at,
     add_rows,
+    chord_newton,
     classify_nodes,
+    fix_nodes,
     gather_block,
 )
 from slipcycle.discrete3d.cone import slip_linearisation
@@ -276,42 +279,39 @@ class StepSolver:
             fixed = count > 0
             if fixed:
                 # the Newton rows of stuck / closed nodes are the identity: exact
-                jt, jn = np.flatnonzero(fix_t), np.flatnonzero(fix_n)
-                cols = np.concatenate([self._rows_q[jt].ravel(), 2 * n + jn])
-                delta = x0[cols] - x[cols]
-                delta[2 * jt.size:] = -x[2 * n + jn]
-                x[cols] += delta
-                add_rows(K, cols, delta, r)       # K symmetric: rows are contiguous
-            S, P = slip[:ns].copy(), sep[:npp].copy()
+                fix_nodes(K, x, x0, r, fix_t, fix_n)
             if ns + npp == 0:
                 if not fixed:
                     self.stats["newton_iterations"] += it
                     return Step(x, r, modes.copy(), drw, it)
                 continue
-            key, U, V, KVU = self._active_block(S, P)
-            D, done, it = self._local_newton(key, S, P, KVU, x[U], r[V], x0, it)
+            block = self._active_block(slip[:ns], sep[:npp])
+            U, V = block[1], block[2]
+            D, done, it = self._local_newton(block, x[U], r[V], x0, it)
             if done and not fixed and not np.any(D):
                 self.stats["newton_iterations"] += it
                 return Step(x, r, modes.copy(), drw, it)
             if D is None:
                 break
-            x[U] += D
-            add_rows(K, U, D, r)
+            add_at(K, U, D, x, r)
         self.stats["failures"] += 1
         return None
 
     def _active_block(self, S: np.ndarray, P: np.ndarray):
         """Unknowns U of the slipping (t1, t2) and separated (t1, t2, n) nodes, the rows
-        V = U ∪ normal rows of the slipping nodes, and the block K[V, U] (cached: the
-        active set repeats over the Newton iterations and consecutive steps)."""
+        V = U ∪ normal rows of the slipping nodes, the block K[V, U] and the nodes'
+        friction coefficients and augmentation parameters (cached: the active set repeats
+        over the Newton iterations and consecutive steps)."""
         key = (S.tobytes(), P.tobytes())
         hit = self._blocks.get(key)
         if hit is None:
             n = self.n
+            S, P = S.copy(), P.copy()
             U = np.concatenate([self._rows_q[S].ravel(),
                                 np.column_stack([self._rows_q[P], 2 * n + P]).ravel()])
             V = np.concatenate([U, 2 * n + S])
-            hit = (key, U, V, gather_block(self.K, V, U))
+            hit = (key, U, V, gather_block(self.K, V, U), self.f[S].copy(),
+                   self.rho_t[S].copy(), self.rho_n[P].copy())
             self._blocks.put(key, hit)
         return hit
 
@@ -363,7 +363,7 @@ class StepSolver:
                     return None
                 self._chos.put(key[1], cho)
             KSP = np.vstack([KVU[:s, s:m], KVU[m:, s:m]])
-            W = cho_solve(cho, KVU[s:m, :s], check_finite=False)
+            W = np.ascontiguousarray(cho_solve(cho, KVU[s:m, :s], check_finite=False))
             Kt = np.vstack([KVU[:s, :s], KVU[m:, :s]]) - KSP @ W
             hit = (cho, W, Kt, KSP)
             self._elims.put(key, hit)
@@ -375,12 +375,37 @@ class StepSolver:
             self._lus.pop(next(iter(self._lus)))
         self._lus[key] = lu
 
-    def _local_newton(self, key, S, P, KVU, xU, rV, x0, it):
-        """Newton iterations on the active unknowns U with the active set held fixed.
+    def _factorise(self, kind, block, elim, zs, zsn, pS):
+        """The Newton matrix of an active set with slipping nodes at the current iterate,
+        factorised: (lu, piv, phi, nvec) for
+        :func:`~slipcycle.discrete3d._kernels.chord_newton` (``kind`` as there), or None
+        if it is singular."""
+        key, U, V, KVU, fS, rhoS, rhoP = block
+        ns, npp = fS.size, rhoP.size
+        self.stats["factorisations"] += 1
+        phi, nvec = slip_linearisation(zs, zsn, pS, fS, rhoS)
+        if kind == 2:
+            J = self._jacobian(elim[2], ns, 0, phi, nvec, fS, rhoS, np.arange(ns))
+        else:
+            J = self._jacobian(KVU, ns, npp, phi, nvec, fS, rhoS, np.arange(ns))
+        f_lu, piv, info = dgetrf(J, overwrite_a=True)
+        if info != 0:           # singular Newton matrix
+            return None
+        lu = (np.asfortranarray(f_lu), piv, np.ascontiguousarray(phi),
+              np.ascontiguousarray(nvec))
+        self._keep(key, lu)
+        return lu
+
+    def _local_newton(self, block, xU, rV, x0, it):
+        """Newton iterations on the active unknowns U with the active set held fixed
+        (compiled: :func:`~slipcycle.discrete3d._kernels.chord_newton`).
 
         Only the reactions of the rows V are followed (r_V += K[V, U] δ): the stuck and
         closed nodes do not enter the Newton system, and their reactions are updated once
-        by the caller, which then re-classifies every node.
+        by the caller, which then re-classifies every node. The Newton matrix last
+        factorised for this active set is reused (chord steps) while the residual falls
+        at least fourfold per step; the converged solution is that of the Newton method
+        with a fresh matrix, only the path differs.
 
         Returns
         -------
@@ -391,113 +416,86 @@ class StepSolver:
         it : int
             Iteration count after these iterations.
         """
-        f = self.f
-        ns, npp = S.size, P.size
-        m = 2 * ns + 3 * npp
-        fS, rhoS = f[S], self.rho_t[S]
-        rhoP = self.rho_n[P]
-        v0S = x0[self._rows_q[S].ravel()].reshape(ns, 2)
-        xU = xU.copy()
-        rV = rV.copy()
+        key, U, V, KVU, fS, rhoS, rhoP = block
+        ns, npp, m = fS.size, rhoP.size, U.size
+        if ns == 0:
+            return self._separated_newton(block, xU, rV, it)
+        v0S = x0[U[:2 * ns]].reshape(ns, 2)
         D = np.zeros(m)
         R = np.empty(m)
         zs = np.empty((ns, 2))
         zsn = np.empty(ns)
-        idx = np.arange(ns)
-        stepped = False
-        # the Newton matrix last factorised for this active set is reused (chord steps)
-        # while the residual falls at least fourfold per step; the converged solution is
-        # that of the Newton method with a fresh matrix, only the path differs
-        lu = self._lus.get(key)
         # separated nodes beside slipping ones: eliminated (:meth:`_separated_block`)
         elim = (self._separated_block(key, KVU, ns, npp)
-                if npp and ns and self.eliminate_separated else None)
-        s = 2 * ns
-        res_prev = np.inf
+                if npp and self.eliminate_separated else None)
+        kind, W, KSP, y = 0, _NO_W, _NO_W, _NO_Y
+        if elim is not None:
+            kind, W, KSP = 2, elim[1], elim[3]
+            if np.any(rV[2 * ns:m]):
+                # K_PP⁻¹ R_P of the separated rows, linear: zero after the first step
+                y = cho_solve(elim[0], rV[2 * ns:m], check_finite=False)
+        lu = self._lus.get(key)
+        res_prev, stepped, fresh = np.inf, False, False
         while True:
-            res, changed = active_residual(xU, rV, v0S, fS, rhoS, rhoP, ns, npp, R, zs,
-                                           zsn)
+            f_lu, piv, phi, nvec = lu if lu is not None else _NO_FACTORS
+            status, it, res_prev, stepped = chord_newton(
+                kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, f_lu, piv, W, KSP,
+                phi, nvec, y, lu is not None, fresh, it, self.max_iter, res_prev, stepped,
+                self.force_tol, self.chord_rate, R, zs, zsn)
+            if status == 3:
+                lu = self._factorise(kind, block, elim, zs, zsn, rV[m:])
+                if lu is None:
+                    return None, False, it + 1
+                fresh = True
+                continue
+            if status == 4:
+                return None, False, it
+            return D, status == 0, it
+
+    def _separated_newton(self, block, xU, rV, it):
+        """:meth:`_local_newton` of an active set of separated nodes only: the rows are
+        linear, the Newton matrix is K_PP itself (its Cholesky factor kept)."""
+        key, U, V, KVU, fS, rhoS, rhoP = block
+        m = U.size
+        D = np.zeros(m)
+        R = np.empty(m)
+        cho = self._lus.get(key)
+        res_prev, stepped = np.inf, False
+        while True:
+            res, changed = active_residual(xU, rV, _NO_NVEC, fS, rhoS, rhoP, 0, rhoP.size,
+                                           R, _NO_NVEC, _NO_Y)
             if stepped and changed:
-                # a node of the active set changed state: back to the full classification
                 return D, False, it
             if res <= self.force_tol:
                 return D, True, it
             if it >= self.max_iter:
                 return D, False, it
             it += 1
-            if lu is not None and res > self.chord_rate * res_prev:
-                lu = None
-            if ns == 0:
-                # separated nodes only: the Newton matrix is K_PP itself
-                if lu is None:
-                    self.stats["factorisations"] += 1
-                    try:
-                        lu = ("cho", cho_factor(KVU[:m, :m], lower=True,
-                                                check_finite=False))
-                    except LinAlgError:
-                        return None, False, it
-                    self._keep(key, lu)
-                delta = cho_solve(lu[1], -R, check_finite=False)
-            elif elim is not None:
-                cho, W, Kt, KSP = elim
-                if lu is None:
-                    self.stats["factorisations"] += 1
-                    phi, nvec = slip_linearisation(zs, zsn, rV[m:], fS, rhoS)
-                    J = self._jacobian(Kt, ns, 0, phi, nvec, fS, rhoS, idx)
-                    f_lu, piv, info = dgetrf(J, overwrite_a=True)
-                    if info != 0:           # singular Newton matrix
-                        return None, False, it
-                    lu = (f_lu, piv, phi, nvec)
-                    self._keep(key, lu)
-                f_lu, piv, phi, nvec = lu
-                rhs = -R[:s]
-                y = None
-                if np.any(R[s:]):       # zero after the first step: its rows are linear
-                    y = cho_solve(cho, R[s:], check_finite=False)
-                    z = KSP @ y                          # K_{VS,P} K_PP⁻¹ R_P
-                    zq = z[:s].reshape(ns, 2)
-                    rhs += (zq - np.matmul(phi, zq[:, :, None])[:, :, 0]
-                            - (fS * z[s:])[:, None] * nvec).ravel()   # J_SP K_PP⁻¹ R_P
-                dS, info = dgetrs(f_lu, piv, rhs)
-                if info != 0:
+            if cho is None or res > self.chord_rate * res_prev:
+                self.stats["factorisations"] += 1
+                try:
+                    cho = cho_factor(KVU, lower=True, check_finite=False)
+                except LinAlgError:
                     return None, False, it
-                dP = -(W @ dS) if y is None else -y - W @ dS
-                if not (np.all(np.isfinite(dS)) and np.all(np.isfinite(dP))):
-                    return None, False, it
-                res_prev = res
-                stepped = True
-                D[:s] += dS
-                D[s:] += dP
-                xU[:s] += dS
-                xU[s:] += dP
-                # the slip rows follow K; the separated rows are solved exactly by the
-                # step (K_PS dS + K_PP dP = −R_P), so their reactions are zero: the
-                # caller recomputes every reaction from K once the set is left
-                rV[:s] += KVU[:s] @ np.concatenate([dS, dP])
-                rV[m:] += KVU[m:] @ np.concatenate([dS, dP])
-                rV[s:m] = 0.0
-                continue
-            else:
-                if lu is None:
-                    self.stats["factorisations"] += 1
-                    phi, nvec = (slip_linearisation(zs, zsn, rV[m:], fS, rhoS) if ns
-                                 else (None, None))
-                    J = self._jacobian(KVU, ns, npp, phi, nvec, fS, rhoS, idx)
-                    f_lu, piv, info = dgetrf(J, overwrite_a=True)
-                    if info != 0:           # singular Newton matrix
-                        return None, False, it
-                    lu = (f_lu, piv)
-                    self._keep(key, lu)
-                delta, info = dgetrs(lu[0], lu[1], -R)
-                if info != 0:
-                    return None, False, it
+                self._keep(key, cho)
+            delta = cho_solve(cho, -R, check_finite=False)
             if not np.all(np.isfinite(delta)):
                 return None, False, it
-            res_prev = res
-            stepped = True
+            res_prev, stepped = res, True
             D += delta
             xU += delta
             rV += KVU @ delta
+
+
+# placeholders of the arrays chord_newton does not read for a kind of active set (typed
+# as the real ones, so that one compiled version serves)
+_NO_LU = np.empty((0, 0), order="F")
+_NO_PIV = np.empty(0, np.int32)
+_NO_PHI = np.empty((0, 2, 2))
+_NO_NVEC = np.empty((0, 2))
+_NO_W = np.empty((0, 0))
+_NO_Y = np.empty(0)
+_NO_FACTORS = (_NO_LU, _NO_PIV, _NO_PHI, _NO_NVEC)
 
 
 @dataclass
