@@ -107,10 +107,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 from scipy.spatial import cKDTree
 from skfem import Basis, ElementTetP1, ElementVector, MeshTet
 
+from slipcycle.condensation import factorize
 from slipcycle.errors import InputError
 from slipcycle.fe.assembly import stiffness
 from slipcycle.fe.contact3d import Case3D, condense_contact_3d, node_dofs_3d
@@ -414,7 +414,8 @@ class LapJointModel:
         Load case name → (K,) grip shortening Φ_kj of every bolt per unit of the case with
         the interface bonded, m per unit (module docstring, "Elastic bolts"); the rows
         of the ``bolt_j`` cases form the bonded joint's bolt compliance (K, K), m/N,
-        symmetric.
+        symmetric. Empty for constant-force bolts (``bolt_stiffness`` 0), which do not
+        use it.
     bolt_stiffness : float
         k_b of each bolt shank, N/m (0: constant-force bolts).
     """
@@ -633,7 +634,9 @@ def bonded_shortening(fe: LapJointFE, bolts: int) -> dict[str, np.ndarray]:
     The contact pairs are tied (v = w = 0 with no gap), the grips held or moved as the
     case prescribes; then s_k = f_kᵀ u with f_k bolt k's washer forces (1 N), the
     approach of its two washer faces (module docstring, "Elastic bolts"). One sparse
-    factorisation.
+    factorisation of the tied stiffness, symmetric positive definite:
+    :func:`slipcycle.condensation.factorize` (symmetric ordering, no pivoting), with about
+    half the fill and CPU time of a general LU on the example joint.
 
     Parameters
     ----------
@@ -660,7 +663,7 @@ def bonded_shortening(fe: LapJointFE, bolts: int) -> dict[str, np.ndarray]:
     rows = np.flatnonzero(col[target] >= 0)
     P = sp.csr_matrix((np.ones(rows.size), (rows, col[target[rows]])),
                       shape=(n, int(free.sum())))
-    solve = splu((P.T @ K @ P).tocsc()).solve
+    solve = factorize((P.T @ K @ P).tocsc()).solve
     washers = np.zeros((n, bolts))
     fields = np.zeros((n, len(fe.cases)))
     for j, case in enumerate(fe.cases):
@@ -706,7 +709,8 @@ def lap_joint_model(joint: LapJoint) -> LapJointModel:
                               tangents=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), fixed=fe.fixed,
                               cases=fe.cases,
                               source=f"slipcycle.fe lap_joint_model {joint!r}")
-    shortening = bonded_shortening(fe, joint.bolt_count)
+    # only elastic bolts need the bonded shortenings (a second factorisation of the model)
+    shortening = bonded_shortening(fe, joint.bolt_count) if joint.bolt_stiffness > 0 else {}
     t_reduce = time.perf_counter() - t1
     N = red.n_nodes
     loads = {}
@@ -721,9 +725,11 @@ def lap_joint_model(joint: LapJoint) -> LapJointModel:
         total = (-np.sum(case["q"][comp::2]) if comp < 2 else -np.sum(case["p"]))
         grip_stiffness[f"{name}_grip_stiffness_N_per_m"] = float(total)
         loads[name] = {"q": case["q"] / total, "p": case["p"] / total}
-        shortening[name] = shortening[name] / total
+        if shortening:
+            shortening[name] = shortening[name] / total
     if joint.end_relief > 0:
         loads["gap"] = red.loads["gap"]
+    if joint.end_relief > 0 and shortening:
         # the gap enters as d_true = d − [0; g]: s_k gains p_kᵀ g (module docstring)
         shortening["gap"] = np.array([float(loads[f"bolt_{k}"]["p"] @ fe.gap)
                                       for k in range(joint.bolt_count)])
