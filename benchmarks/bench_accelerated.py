@@ -118,18 +118,11 @@ def block_41_rows() -> list[dict]:
 
 def calculix_rows() -> list[dict]:
     """The 121-node CalculiX block (3-D): default path against plain cycling."""
-    from bench_calculix import DELTA_N, DELTA_T, FRICTION, reduced_block
+    from bench_calculix import block_system, reduced_block
 
-    from slipcycle.discrete3d import FrictionalSystem3D, Load3D, simulate3d
+    from slipcycle.discrete3d import simulate3d
 
-    red = reduced_block()
-    n = red.C.shape[0]
-    load = Load3D.harmonic(DELTA_N * red.loads["normal"]["p"],
-                           DELTA_N * red.loads["normal"]["q"],
-                           DELTA_T * red.loads["tangential"]["p"],
-                           DELTA_T * red.loads["tangential"]["q"])
-    system = FrictionalSystem3D(red.A, red.B, red.C, np.full(n, FRICTION),
-                                accept_ill_posed=True)
+    system, load = block_system(reduced_block())
     kw = dict(steps_per_cycle=40, record=False)
     # plain cycling of the adaptive map stalls near 1e-8 (the step control's switching,
     # module docstring of slipcycle.discrete3d.steady); that of the replayed map converges

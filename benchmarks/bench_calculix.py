@@ -137,10 +137,9 @@ def reduced_block(n=(10, 10, 5)):
                                cases=cases)
 
 
-def slipcycle_run(red, cycles: int = 200):
-    """The periodic state of the reduced block under the deck's load; the result."""
+def block_system(red):
+    """The reduced block's frictional system and the deck's load: (system, load)."""
     from slipcycle.discrete3d import FrictionalSystem3D, Load3D
-    from slipcycle.discrete3d.case import solve_model
 
     n = red.C.shape[0]
     load = Load3D.harmonic(DELTA_N * red.loads["normal"]["p"],
@@ -149,6 +148,14 @@ def slipcycle_run(red, cycles: int = 200):
                            DELTA_T * red.loads["tangential"]["q"])
     system = FrictionalSystem3D(red.A, red.B, red.C, np.full(n, FRICTION),
                                 accept_ill_posed=True)
+    return system, load
+
+
+def slipcycle_run(red, cycles: int = 200):
+    """The periodic state of the reduced block under the deck's load; the result."""
+    from slipcycle.discrete3d.case import solve_model
+
+    system, load = block_system(red)
     return solve_model(system, load, {"cycles": cycles, "steps_per_cycle": 40}, fields=())
 
 

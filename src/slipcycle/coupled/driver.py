@@ -323,8 +323,10 @@ class Certificate:
         ρ/(1 − ρ) times the last increment (ρ the ratio of the last two plain increments;
         the last increment where they do not shrink).
     dissipation_distance : float
-        Estimated distance of D from that limit, relative to |D| [1]: the last change of
-        D times max(1, ρ/(1 − ρ)).
+        Estimated distance of D from that limit [1]: the last change of D times max(1,
+        ρ/(1 − ρ)), relative to |D| (to the energy scale F × displacement scale where D
+        is 0); inf with fewer than three cycles run (the first cycle from an assembled
+        or imposed state says nothing about D's convergence).
     """
 
     acceleration: str
@@ -341,7 +343,8 @@ def certificate(run: CycleState, accelerator: Accelerator) -> Certificate:
         return Certificate(accelerator.method, float(res), np.inf, np.inf)
     near = creep_distance(starts[-3:], res, run.xscale)
     factor = near / res if res > 0 else 1.0
-    d_last = abs(dis[-1]) if dis else 0.0
-    change = abs(dis[-1] - dis[-2]) if len(dis) >= 2 else np.inf
-    d_dist = 0.0 if change == 0.0 else change * factor / d_last if d_last > 0 else np.inf
+    d_dist = np.inf
+    if len(dis) >= 3:
+        scale = abs(dis[-1]) or run.F * run.xscale
+        d_dist = abs(dis[-1] - dis[-2]) * factor / scale
     return Certificate(accelerator.method, float(res), float(near), float(d_dist))
