@@ -15,7 +15,8 @@ import numpy as np
 from numba import njit
 
 __all__ = ["add_rows", "gather_block", "classify_nodes", "active_residual", "lu_solve",
-           "chord_newton", "fix_nodes", "add_at"]
+           "chord_newton", "fix_nodes", "add_at", "step_dissipation", "doubling_error",
+           "book_step", "event_values", "event_crossings"]
 
 
 @njit(cache=True, nogil=True)
@@ -313,3 +314,100 @@ def add_at(K, cols, d, x, r):  # pragma: no cover - compiled
     for k in range(cols.size):
         x[cols[k]] += d[k]
     add_rows(K, cols, d, r)
+
+
+@njit(cache=True, nogil=True)
+def step_dissipation(x0, r0, x1, r1, n):  # pragma: no cover - compiled
+    """Σ_j −½(q_j⁰ + q_j¹)·Δv_j [J] of a step from (x0, r0) to (x1, r1) (trapezoidal)."""
+    d = 0.0
+    for j in range(n):
+        a, b = 2 * j, 2 * j + 1
+        d -= (0.5 * (r0[a] + r1[a]) * (x1[a] - x0[a])
+              + 0.5 * (r0[b] + r1[b]) * (x1[b] - x0[b]))
+    return d
+
+
+@njit(cache=True, nogil=True)
+def doubling_error(x0, r0, xf, rf, x1, r1, x2, r2, n):  # pragma: no cover - compiled
+    """The step-doubling estimates of an interval from (x0, r0) solved as one step
+    (xf, rf) and as two half steps (x1, r1), (x2, r2): max |xf − x2| [m] and the
+    dissipations of the one step and of the two [J]."""
+    err = 0.0
+    for i in range(xf.size):
+        err = max(err, abs(xf[i] - x2[i]))
+    d_full = step_dissipation(x0, r0, xf, rf, n)
+    d_half = step_dissipation(x0, r0, x1, r1, n) + step_dissipation(x1, r1, x2, r2, n)
+    return err, d_full, d_half
+
+
+@njit(cache=True, nogil=True)
+def book_step(x0, r0, x1, r1, drw, modes, dissipation, slip_length, separated,
+              slipped):  # pragma: no cover - compiled
+    """Bookkeeping of a committed step (``Evolution3D._commit``): adds each node's
+    dissipation −½(q⁰ + q¹)·Δv [J] and, for a slipping node, its slip length |Δv| [m];
+    flags separated and slipping nodes.
+
+    Returns
+    -------
+    work : float
+        ½(x⁰ + x¹)·Δr^w [J].
+    normal_work : float
+        Σ ½(p⁰ + p¹)Δw [J].
+    none_stuck : bool
+        No node sticks at the end of the step.
+    """
+    n = modes.size
+    work = 0.0
+    for i in range(x0.size):
+        work += 0.5 * (x0[i] + x1[i]) * drw[i]
+    normal_work = 0.0
+    none_stuck = True
+    for j in range(n):
+        a, b, k = 2 * j, 2 * j + 1, 2 * n + j
+        d1, d2 = x1[a] - x0[a], x1[b] - x0[b]
+        dissipation[j] -= 0.5 * (r0[a] + r1[a]) * d1 + 0.5 * (r0[b] + r1[b]) * d2
+        normal_work += 0.5 * (r0[k] + r1[k]) * (x1[k] - x0[k])
+        if modes[j] == 1:
+            slip_length[j] += np.sqrt(d1 * d1 + d2 * d2)
+            slipped[j] = True
+        elif modes[j] == 2:
+            separated[j] = True
+        else:
+            none_stuck = False
+    return work, normal_work, none_stuck
+
+
+@njit(cache=True, nogil=True)
+def event_values(x0, x, r, f, rho_t, rho_n):  # pragma: no cover - compiled
+    """The event functions (2N,) [N] of ``Evolution3D._event_values``: φ_j = p_j − ρ_n w_j,
+    then ψ_j = |q_j − ρ_t Δv_j| − f_j φ_j."""
+    n = f.size
+    g = np.empty(2 * n)
+    for j in range(n):
+        phi = r[2 * n + j] - rho_n[j] * x[2 * n + j]
+        z1 = r[2 * j] - rho_t[j] * (x[2 * j] - x0[2 * j])
+        z2 = r[2 * j + 1] - rho_t[j] * (x[2 * j + 1] - x0[2 * j + 1])
+        g[j] = phi
+        g[n + j] = np.hypot(z1, z2) - f[j] * phi
+    return g
+
+
+@njit(cache=True, nogil=True)
+def event_crossings(g0, g1, stops, tol):  # pragma: no cover - compiled
+    """Indices of the events crossed between the event values g0 and g1 (2N,)
+    (``Evolution3D._crossings``): a sign change of φ_j, and if ``stops`` one of ψ_j from
+    below for a node closed at both ends; values within ``tol`` are at their event."""
+    n = g0.size // 2
+    out = np.empty(2 * n, np.int64)
+    k = 0
+    for i in range(2 * n):
+        a, b = g0[i], g1[i]
+        if abs(a) <= tol or abs(b) <= tol or (a > 0) == (b > 0):
+            continue
+        if i >= n:
+            j = i - n
+            if not (stops and g0[j] > tol and g1[j] > tol and a < 0):
+                continue
+        out[k] = i
+        k += 1
+    return out[:k]

@@ -98,8 +98,12 @@ from slipcycle.discrete3d._kernels import (
     active_residual,
     add_at,
     add_rows,
+    book_step,
     chord_newton,
     classify_nodes,
+    doubling_error,
+    event_crossings,
+    event_values,
     fix_nodes,
     gather_block,
 )
@@ -624,26 +628,16 @@ class Evolution3D:
         self.r = self.r_w + self.K @ self.x
 
     # -- bookkeeping ----------------------------------------------------------------------
-    def _step_dissipation(self, x0, r0, step: Step) -> np.ndarray:
-        n = self.n
-        dv = (step.x[:2 * n] - x0[:2 * n]).reshape(n, 2)
-        qm = 0.5 * (r0[:2 * n] + step.r[:2 * n]).reshape(n, 2)
-        return -np.einsum("ja,ja->j", qm, dv)
-
     def _commit(self, step: Step) -> None:
-        n, t = self.n, self._totals
+        t = self._totals
         x0, r0 = self.x, self.r
         if t is not None:
-            t.dissipation += self._step_dissipation(x0, r0, step)
-            t.work += float(0.5 * (x0 + step.x) @ step.drw)
-            t.normal_work += float(0.5 * (r0[2 * n:] + step.r[2 * n:])
-                                   @ (step.x[2 * n:] - x0[2 * n:]))
-            dv = (step.x[:2 * n] - x0[:2 * n]).reshape(n, 2)
-            slip = step.modes == SLIP
-            t.slip_length[slip] += np.linalg.norm(dv[slip], axis=1)
-            t.separated |= step.modes == SEPARATED
-            t.slipped |= slip
-            t.all_slip_or_separated |= bool(np.all(step.modes != STICK))
+            work, normal_work, none_stuck = book_step(
+                x0, r0, step.x, step.r, step.drw, step.modes, t.dissipation,
+                t.slip_length, t.separated, t.slipped)
+            t.work += work
+            t.normal_work += normal_work
+            t.all_slip_or_separated |= none_stuck
             t.steps += 1
         if self.step_log is not None:
             self.step_log.append((step.x.copy(), step.r.copy(), step.modes.copy(), x0.copy()))
@@ -696,10 +690,9 @@ class Evolution3D:
         """(accepted, smooth): the step-doubling test of an interval solved as ``full``
         and as the half steps ``h1``, ``h2`` from (x0, r0); ``smooth`` given: the test
         of a step kept with (True) or without (False) the extrapolation."""
-        err = float(np.max(np.abs(full.x - h2.x))) / self.disp_scale
-        d_full = float(np.sum(self._step_dissipation(x0, r0, full)))
-        d_half = float(np.sum(self._step_dissipation(x0, r0, h1))
-                       + np.sum(self._step_dissipation(h1.x, h1.r, h2)))
+        err, d_full, d_half = doubling_error(x0, r0, full.x, full.r, h1.x, h1.r, h2.x,
+                                             h2.r, self.n)
+        err /= self.disp_scale
         err_d = abs(d_full - d_half) / (self.F * self.disp_scale)
         if smooth is None:
             smooth = self._smooth(full, h1, h2)
@@ -720,21 +713,15 @@ class Evolution3D:
         starts to slip. Both are continuous along the path and affine in the load
         parameter while no node changes state (one tangential direction).
         """
-        n = self.n
-        phi = r[2 * n:] - self.solver.rho_n * x[2 * n:]
-        z = (r[:2 * n] - np.repeat(self.solver.rho_t, 2) * (x[:2 * n] - x0[:2 * n]))
-        psi = np.hypot(z[0::2], z[1::2]) - self.solver.f * phi
-        return np.concatenate([phi, psi])
+        sv = self.solver
+        return event_values(x0, x, r, sv.f, sv.rho_t, sv.rho_n)
 
     def _crossings(self, g0: np.ndarray, g1: np.ndarray, stops: bool) -> np.ndarray:
         """Events (indices into the event functions) crossed between two states: a sign
         change of φ_j (a node closes or opens) and, if ``stops``, of ψ_j from below for a
         node closed at both ends (it starts to slip); functions within the event
         tolerance at either end are at their event already."""
-        n, tol = self.n, self.event_tol * self.F
-        cross = (np.abs(g0) > tol) & (np.abs(g1) > tol) & ((g0 > 0) != (g1 > 0))
-        cross[n:] &= stops & (g0[:n] > tol) & (g1[:n] > tol) & (g0[n:] < 0)
-        return np.flatnonzero(cross)
+        return event_crossings(g0, g1, stops, self.event_tol * self.F)
 
     @staticmethod
     def _first(idx: np.ndarray, g0: np.ndarray, g1: np.ndarray) -> int:
