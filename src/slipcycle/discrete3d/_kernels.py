@@ -16,7 +16,8 @@ from numba import njit
 
 __all__ = ["add_rows", "gather_block", "classify_nodes", "active_residual", "lu_solve",
            "chord_newton", "fix_nodes", "add_at", "step_dissipation", "doubling_error",
-           "book_step", "event_values", "event_crossings"]
+           "book_step", "event_values", "event_crossings", "slip_jacobian",
+           "active_newton"]
 
 
 @njit(cache=True, nogil=True)
@@ -411,3 +412,74 @@ def event_crossings(g0, g1, stops, tol):  # pragma: no cover - compiled
         out[k] = i
         k += 1
     return out[:k]
+
+
+@njit(cache=True, nogil=True)
+def slip_jacobian(KVU, ns, npp, phi, nvec, fS, rhoS):  # pragma: no cover - compiled
+    """Generalised Jacobian (m × m) of the active rows (``StepSolver._factorise``): on the
+    slipping rows (I − Φ_i) K_q − f n_i K_p + ρ_t Φ_i on the node's own slip columns
+    (:mod:`slipcycle.discrete3d.cone`), the rows of K on the separated ones.
+
+    Parameters
+    ----------
+    KVU : (m + ns, m) array
+        Rows of K of the active unknowns, then the normal rows of the slipping nodes.
+    phi : (ns, 2, 2) array, nvec : (ns, 2) array, fS, rhoS : (ns,) arrays
+    """
+    m = 2 * ns + 3 * npp
+    J = np.empty((m, m))
+    for i in range(ns):
+        for a in range(2):
+            row = 2 * i + a
+            p0, p1 = phi[i, a, 0], phi[i, a, 1]
+            fn = fS[i] * nvec[i, a]
+            for c in range(m):
+                J[row, c] = (KVU[row, c] - (p0 * KVU[2 * i, c] + p1 * KVU[2 * i + 1, c])
+                             - fn * KVU[m + i, c])
+            J[row, 2 * i] += rhoS[i] * p0
+            J[row, 2 * i + 1] += rhoS[i] * p1
+    for k in range(2 * ns, m):
+        for c in range(m):
+            J[k, c] = KVU[k, c]
+    return J
+
+
+@njit(cache=True, nogil=True)
+def active_newton(kind, K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU, lu, piv,
+                  W, KSP, phi, nvec, y, has_lu, fresh, it, max_iter, res_prev, stepped,
+                  force_tol, chord_rate, R, zs, zsn):  # pragma: no cover - compiled
+    """One round of the Newton iteration on an active set (``StepSolver._local_newton``):
+    with ``first`` the active unknowns ``xU`` = x[U] and reactions ``rV`` = r[V] are
+    gathered, then :func:`chord_newton` runs; unless it needs a new matrix (status 3) or
+    failed (4), the change D of x[U] is applied to x and, through the rows of K, to
+    every reaction r.
+
+    Returns
+    -------
+    status, it, res_prev, stepped
+        As :func:`chord_newton`.
+    moved : bool
+        D ≠ 0 (applied).
+    """
+    ns, npp = fS.size, rhoP.size
+    if first:
+        for k in range(U.size):
+            xU[k] = x[U[k]]
+        for k in range(V.size):
+            rV[k] = r[V[k]]
+    v0S = np.empty((ns, 2))
+    for i in range(ns):
+        v0S[i, 0] = x0[U[2 * i]]
+        v0S[i, 1] = x0[U[2 * i + 1]]
+    status, it, res_prev, stepped = chord_newton(
+        kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, lu, piv, W, KSP, phi, nvec, y,
+        has_lu, fresh, it, max_iter, res_prev, stepped, force_tol, chord_rate, R, zs, zsn)
+    moved = False
+    if status <= 2:
+        for k in range(D.size):
+            if D[k] != 0.0:
+                moved = True
+                break
+        if moved:
+            add_at(K, U, D, x, r)
+    return status, it, res_prev, stepped, moved

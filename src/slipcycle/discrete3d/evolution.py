@@ -95,17 +95,18 @@ from scipy.linalg import LinAlgError, cho_factor, cho_solve
 from scipy.linalg.lapack import dgetrf
 
 from slipcycle.discrete3d._kernels import (
+    active_newton,
     active_residual,
     add_at,
     add_rows,
     book_step,
-    chord_newton,
     classify_nodes,
     doubling_error,
     event_crossings,
     event_values,
     fix_nodes,
     gather_block,
+    slip_jacobian,
 )
 from slipcycle.discrete3d.cone import slip_linearisation
 from slipcycle.discrete3d.model import SEPARATED, SLIP, STICK, FrictionalSystem3D
@@ -290,14 +291,13 @@ class StepSolver:
                     return Step(x, r, modes.copy(), drw, it)
                 continue
             block = self._active_block(slip[:ns], sep[:npp])
-            U, V = block[1], block[2]
-            D, done, it = self._local_newton(block, x[U], r[V], x0, it)
-            if done and not fixed and not np.any(D):
+            # x[U] and the reactions r are updated in place unless the round failed
+            status, moved, it = self._local_newton(block, x, r, x0, it)
+            if status == 0 and not fixed and not moved:
                 self.stats["newton_iterations"] += it
                 return Step(x, r, modes.copy(), drw, it)
-            if D is None:
+            if status == 4:
                 break
-            add_at(K, U, D, x, r)
         self.stats["failures"] += 1
         return None
 
@@ -318,24 +318,6 @@ class StepSolver:
                    self.rho_t[S].copy(), self.rho_n[P].copy())
             self._blocks.put(key, hit)
         return hit
-
-    def _jacobian(self, KVU, ns, npp, phi, nvec, fS, rhoS, idx):
-        """Generalised Jacobian (m × m) of the active rows: the cone's linearisation
-        (``phi``, ``nvec`` of :func:`~slipcycle.discrete3d.cone.slip_linearisation`) on
-        the slipping rows, the rows of K on the separated ones."""
-        m = 2 * ns + 3 * npp
-        J = np.empty((m, m))
-        if ns:
-            Kq = KVU[:2 * ns].reshape(ns, 2, m)
-            Js = (Kq - np.matmul(phi, Kq)
-                  - (fS[:, None, None] * nvec[:, :, None]) * KVU[m:][:, None, :])
-            # + ρ_t Φ on the node's own slip columns (positions 2i, 2i+1 of U)
-            Js[idx, :, 2 * idx] += rhoS[:, None] * phi[:, :, 0]
-            Js[idx, :, 2 * idx + 1] += rhoS[:, None] * phi[:, :, 1]
-            J[:2 * ns] = Js.reshape(2 * ns, m)
-        if npp:
-            J[2 * ns:] = KVU[2 * ns:m]
-        return J
 
     def _separated_block(self, key, KVU, ns, npp):
         """The separated nodes' rows condensed once per active set (block elimination).
@@ -388,73 +370,80 @@ class StepSolver:
         ns, npp = fS.size, rhoP.size
         self.stats["factorisations"] += 1
         phi, nvec = slip_linearisation(zs, zsn, pS, fS, rhoS)
+        phi, nvec = np.ascontiguousarray(phi), np.ascontiguousarray(nvec)
         if kind == 2:
-            J = self._jacobian(elim[2], ns, 0, phi, nvec, fS, rhoS, np.arange(ns))
+            J = slip_jacobian(elim[2], ns, 0, phi, nvec, fS, rhoS)
         else:
-            J = self._jacobian(KVU, ns, npp, phi, nvec, fS, rhoS, np.arange(ns))
+            J = slip_jacobian(KVU, ns, npp, phi, nvec, fS, rhoS)
         f_lu, piv, info = dgetrf(J, overwrite_a=True)
         if info != 0:           # singular Newton matrix
             return None
-        lu = (np.asfortranarray(f_lu), piv, np.ascontiguousarray(phi),
-              np.ascontiguousarray(nvec))
+        lu = (np.asfortranarray(f_lu), piv, phi, nvec)
         self._keep(key, lu)
         return lu
 
-    def _local_newton(self, block, xU, rV, x0, it):
+    def _local_newton(self, block, x, r, x0, it):
         """Newton iterations on the active unknowns U with the active set held fixed
-        (compiled: :func:`~slipcycle.discrete3d._kernels.chord_newton`).
+        (compiled: :func:`~slipcycle.discrete3d._kernels.active_newton`), then x[U] and
+        the reactions r (both modified) updated by the change D of x[U].
 
-        Only the reactions of the rows V are followed (r_V += K[V, U] δ): the stuck and
-        closed nodes do not enter the Newton system, and their reactions are updated once
-        by the caller, which then re-classifies every node. The Newton matrix last
-        factorised for this active set is reused (chord steps) while the residual falls
-        at least fourfold per step; the converged solution is that of the Newton method
-        with a fresh matrix, only the path differs.
+        Only the reactions of the rows V are followed in the iterations
+        (r_V += K[V, U] δ): the stuck and closed nodes do not enter the Newton system,
+        and their reactions are updated once at the end (r += K[:, U] D), after which
+        the caller re-classifies every node. The Newton matrix last factorised for this
+        active set is reused (chord steps) while the residual falls at least fourfold
+        per step; the converged solution is that of the Newton method with a fresh
+        matrix, only the path differs.
 
         Returns
         -------
-        D : (m,) array or None
-            Change of x[U] (None: singular or non-finite Newton step).
-        converged : bool
-            The residual of the active rows is within tolerance at ``xU + D``.
+        status : int
+            0 the residual of the active rows is within tolerance, 1 a node of the
+            active set changed state, 2 ``max_iter`` reached, 4 a singular or
+            non-finite Newton step (nothing applied).
+        moved : bool
+            D ≠ 0.
         it : int
             Iteration count after these iterations.
         """
         key, U, V, KVU, fS, rhoS, rhoP = block
         ns, npp, m = fS.size, rhoP.size, U.size
         if ns == 0:
-            return self._separated_newton(block, xU, rV, it)
-        v0S = x0[U[:2 * ns]].reshape(ns, 2)
-        D = np.zeros(m)
-        R = np.empty(m)
-        zs = np.empty((ns, 2))
-        zsn = np.empty(ns)
+            D, done, it = self._separated_newton(block, x[U], r[V], it)
+            if D is None:
+                return 4, False, it
+            moved = bool(np.any(D))
+            if moved:
+                add_at(self.K, U, D, x, r)
+            return (0 if done else 1), moved, it
+        xU, rV, D = np.empty(m), np.empty(V.size), np.zeros(m)
+        R, zs, zsn = np.empty(m), np.empty((ns, 2)), np.empty(ns)
         # separated nodes beside slipping ones: eliminated (:meth:`_separated_block`)
         elim = (self._separated_block(key, KVU, ns, npp)
                 if npp and self.eliminate_separated else None)
         kind, W, KSP, y = 0, _NO_W, _NO_W, _NO_Y
         if elim is not None:
             kind, W, KSP = 2, elim[1], elim[3]
-            if np.any(rV[2 * ns:m]):
+            rP = r[V[2 * ns:m]]
+            if np.any(rP):
                 # K_PP⁻¹ R_P of the separated rows, linear: zero after the first step
-                y = cho_solve(elim[0], rV[2 * ns:m], check_finite=False)
+                y = cho_solve(elim[0], rP, check_finite=False)
         lu = self._lus.get(key)
-        res_prev, stepped, fresh = np.inf, False, False
+        res_prev, stepped, fresh, first = np.inf, False, False, True
         while True:
             f_lu, piv, phi, nvec = lu if lu is not None else _NO_FACTORS
-            status, it, res_prev, stepped = chord_newton(
-                kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, f_lu, piv, W, KSP,
-                phi, nvec, y, lu is not None, fresh, it, self.max_iter, res_prev, stepped,
-                self.force_tol, self.chord_rate, R, zs, zsn)
+            status, it, res_prev, stepped, moved = active_newton(
+                kind, self.K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU, f_lu,
+                piv, W, KSP, phi, nvec, y, lu is not None, fresh, it, self.max_iter,
+                res_prev, stepped, self.force_tol, self.chord_rate, R, zs, zsn)
+            first = False
             if status == 3:
                 lu = self._factorise(kind, block, elim, zs, zsn, rV[m:])
                 if lu is None:
-                    return None, False, it + 1
+                    return 4, False, it + 1
                 fresh = True
                 continue
-            if status == 4:
-                return None, False, it
-            return D, status == 0, it
+            return status, moved, it
 
     def _separated_newton(self, block, xU, rV, it):
         """:meth:`_local_newton` of an active set of separated nodes only: the rows are
