@@ -239,3 +239,29 @@ def test_fe_block_401_default_path_at_the_default_tolerance_lands_within_1e6_of_
     loose = simulate(system, load, **kw)
     assert loose.cycles_run < fast.cycles_run
     assert abs(loose.dissipation_per_cycle - PLAIN_D_401) > 1e-5 * PLAIN_D_401
+
+
+@pytest.mark.parametrize("seed", [1, 3])
+def test_3d_accelerated_runs_report_their_jumps_and_are_certified(seed):
+    """The random coupled 3-D systems of ``test_discrete3d_steady_jump.py``: a run whose
+    state the Anderson jumps shaped says so (``anderson``), its last cycle is a plain one
+    from that state within the tolerance, and its summary carries the certificate;
+    ``accelerate=False`` says ``none``."""
+    from test_discrete3d_steady_jump import _random_coupled
+
+    from slipcycle.discrete3d import simulate3d
+    from slipcycle.discrete3d.case import solve_model
+
+    system, load = _random_coupled(seed, 8)
+    kw = dict(cycles=200, steps_per_cycle=40, step_tol=1e-6, tol=1e-9, record=False)
+    acc = simulate3d(system, load, **kw)
+    assert acc.jumps >= 1 and acc.certificate.acceleration == "anderson"
+    assert acc.certificate.certified_residual == acc.residual <= 1e-9
+    plain = simulate3d(system, load, accelerate=False, **kw)
+    assert plain.certificate.acceleration == "none"
+    summary = solve_model(system, load, {"cycles": 200, "steps_per_cycle": 40,
+                                         "step_tol": 1e-6, "tol": 1e-9},
+                          fields=()).summary()
+    assert summary["acceleration"] == "anderson"
+    assert summary["certified_residual"] == pytest.approx(acc.residual, rel=1e-12)
+    assert summary["units"]["memory_distance"] == "1"
