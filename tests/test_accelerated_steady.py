@@ -108,6 +108,19 @@ def test_a_certificate_that_the_cycles_left_cannot_give_is_not_converged():
     assert run.state == "not_converged" and run.residual > 1e-8
 
 
+def test_a_ratcheting_run_has_no_distance_to_a_limit():
+    """x → x + drift: ratcheting, whose certificate gives no distance (None in a summary)."""
+    evo = _AffineCycle(np.eye(2), [1e-3, 0.0], np.zeros(2))
+    run = CycleState(SimpleNamespace(n_nodes=1), evo, RunSettings(cycles=20, tol=1e-8),
+                     CycleHistory(1.0, False, [evo.x.copy()]), np.zeros(2), 1.0)
+    acc = PlainCycling()
+    run_cycles(run, np.zeros(1), np.zeros((1, 2)), acc)
+    assert run.state == "ratcheting"
+    cert = certificate(run, acc)
+    assert cert.acceleration == "none"
+    assert cert.memory_distance == cert.dissipation_distance == np.inf
+
+
 def test_plain_cycling_reports_no_acceleration_and_its_own_creep_distance():
     system, load = _random_case(7, 3, False)
     plain = simulate(system, load, accelerate=False, cycles=400, steps_per_cycle=40,

@@ -339,7 +339,8 @@ def certificate(run: CycleState, accelerator: Accelerator) -> Certificate:
     """The :class:`Certificate` of a finished run (its last three starts and D's)."""
     starts, dis = run.history.starts, run.history.dissipation
     res = run.residual
-    if not np.isfinite(res) or len(starts) < 2:
+    if not np.isfinite(res) or len(starts) < 2 or run.state == "ratcheting":
+        # a ratcheting state has no limit to be distant from
         return Certificate(accelerator.method, float(res), np.inf, np.inf)
     near = creep_distance(starts[-3:], res, run.xscale)
     factor = near / res if res > 0 else 1.0
