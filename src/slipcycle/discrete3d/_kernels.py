@@ -17,7 +17,7 @@ from numba import njit
 __all__ = ["add_rows", "gather_block", "classify_nodes", "active_residual", "lu_solve",
            "chord_newton", "fix_nodes", "add_at", "step_dissipation", "doubling_error",
            "book_step", "event_values", "event_crossings", "slip_jacobian",
-           "active_newton"]
+           "active_newton", "slip_rounds"]
 
 
 @njit(cache=True, nogil=True)
@@ -483,3 +483,80 @@ def active_newton(kind, K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU
         if moved:
             add_at(K, U, D, x, r)
     return status, it, res_prev, stepped, moved
+
+
+@njit(cache=True, nogil=True)
+def slip_rounds(K, x, r, x0, f, rho_t, rho_n, modes, fix_t, fix_n, slip, sep, U, V, first,
+                fixed, xU, rV, D, fS, rhoS, KVU, lu, piv, has_lu, fresh, it, rounds,
+                max_iter, res_prev, stepped, force_tol, chord_rate, R, zs,
+                zsn):  # pragma: no cover - compiled
+    """The rounds of ``StepSolver._newton`` while the active set is the same set of
+    slipping nodes (no separated node): each round the chord iterations
+    (:func:`chord_newton`, the whole active Jacobian), the change applied to x and r,
+    then the classification of every node (:func:`classify_nodes`, :func:`fix_nodes`),
+    as the Python loop does, without returning to it between rounds.
+
+    ``first``: the round starts (gather x[U], r[V]); else the chord loop resumes with
+    ``res_prev``, ``stepped`` (after the caller factorised: ``fresh``). ``fixed``: the
+    classification of this round fixed nodes.
+
+    Returns
+    -------
+    code : int
+        3 a new Newton matrix is needed (as :func:`chord_newton`), 4 failed (a
+        non-finite step, or the iteration limits reached), 5 converged (the step is x, r
+        with the node states ``modes``), 6 the next round's active set differs (its
+        classification done: ``slip``, ``sep``, and its nodes fixed).
+    it, rounds, res_prev, stepped
+        The counters, to resume.
+    count, ns, npp
+        The last classification (:func:`classify_nodes`) when code is 6.
+    """
+    ns = fS.size
+    no_w = np.empty((0, 0))
+    no_phi = np.empty((0, 2, 2))
+    no_nvec = np.empty((0, 2))
+    no_p = np.empty(0)
+    v0S = np.empty((ns, 2))
+    for i in range(ns):
+        v0S[i, 0] = x0[U[2 * i]]
+        v0S[i, 1] = x0[U[2 * i + 1]]
+    while True:
+        if first:
+            for k in range(U.size):
+                xU[k] = x[U[k]]
+                D[k] = 0.0
+            for k in range(V.size):
+                rV[k] = r[V[k]]
+            res_prev, stepped = np.inf, False
+        status, it, res_prev, stepped = chord_newton(
+            0, xU, rV, D, v0S, fS, rhoS, no_p, ns, 0, KVU, lu, piv, no_w, no_w, no_phi,
+            no_nvec, no_p, has_lu, fresh, it, max_iter, res_prev, stepped, force_tol,
+            chord_rate, R, zs, zsn)
+        if status >= 3:
+            return status, it, rounds, res_prev, stepped, 0, 0, 0
+        moved = False
+        for k in range(D.size):
+            if D[k] != 0.0:
+                moved = True
+                break
+        if moved:
+            add_at(K, U, D, x, r)
+        if status == 0 and not fixed and not moved:
+            return 5, it, rounds, res_prev, stepped, 0, 0, 0
+        if not (it < max_iter and rounds < max_iter):
+            return 4, it, rounds, res_prev, stepped, 0, 0, 0
+        rounds += 1
+        count, ns2, npp2 = classify_nodes(x, r, x0, f, rho_t, rho_n, modes, fix_t, fix_n,
+                                          slip, sep)
+        fixed = count > 0
+        if fixed:
+            fix_nodes(K, x, x0, r, fix_t, fix_n)
+        same = npp2 == 0 and ns2 == ns
+        for i in range(ns2 if same else 0):
+            if 2 * slip[i] != U[2 * i]:
+                same = False
+                break
+        if not same:
+            return 6, it, rounds, res_prev, stepped, count, ns2, npp2
+        first, fresh = True, False

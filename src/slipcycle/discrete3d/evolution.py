@@ -107,6 +107,7 @@ from slipcycle.discrete3d._kernels import (
     fix_nodes,
     gather_block,
     slip_jacobian,
+    slip_rounds,
 )
 from slipcycle.discrete3d.cone import slip_linearisation
 from slipcycle.discrete3d.model import SEPARATED, SLIP, STICK, FrictionalSystem3D
@@ -276,21 +277,35 @@ class StepSolver:
         slip = np.empty(n, np.int64)
         sep = np.empty(n, np.int64)
         it = rounds = 0
-        while it < self.max_iter and rounds < self.max_iter:
-            rounds += 1
-            # node states from the augmented variables (cone.node_states, one pass)
-            count, ns, npp = classify_nodes(x, r, x0, f, self.rho_t, self.rho_n, modes,
-                                            fix_t, fix_n, slip, sep)
-            fixed = count > 0
-            if fixed:
-                # the Newton rows of stuck / closed nodes are the identity: exact
-                fix_nodes(K, x, x0, r, fix_t, fix_n)
+        pending = False       # the next round's classification is at hand (slip_rounds)
+        while pending or (it < self.max_iter and rounds < self.max_iter):
+            if not pending:
+                rounds += 1
+                # node states from the augmented variables (cone.node_states, one pass)
+                count, ns, npp = classify_nodes(x, r, x0, f, self.rho_t, self.rho_n, modes,
+                                                fix_t, fix_n, slip, sep)
+                fixed = count > 0
+                if fixed:
+                    # the Newton rows of stuck / closed nodes are the identity: exact
+                    fix_nodes(K, x, x0, r, fix_t, fix_n)
+            pending = False
             if ns + npp == 0:
                 if not fixed:
                     self.stats["newton_iterations"] += it
                     return Step(x, r, modes.copy(), drw, it)
                 continue
             block = self._active_block(slip[:ns], sep[:npp])
+            if npp == 0:
+                # slipping nodes only: the rounds on this set run compiled
+                code, it, rounds, count, ns, npp = self._slip_rounds(
+                    block, x, r, x0, it, rounds, fixed, modes, fix_t, fix_n, slip, sep)
+                if code == 5:
+                    self.stats["newton_iterations"] += it
+                    return Step(x, r, modes.copy(), drw, it)
+                if code == 4:
+                    break
+                fixed, pending = count > 0, True
+                continue
             # x[U] and the reactions r are updated in place unless the round failed
             status, moved, it = self._local_newton(block, x, r, x0, it)
             if status == 0 and not fixed and not moved:
@@ -300,6 +315,38 @@ class StepSolver:
                 break
         self.stats["failures"] += 1
         return None
+
+    def _slip_rounds(self, block, x, r, x0, it, rounds, fixed, modes, fix_t, fix_n, slip,
+                     sep):
+        """The rounds of :meth:`_newton` on an active set of slipping nodes only, compiled
+        (:func:`~slipcycle.discrete3d._kernels.slip_rounds`) until the set changes (code
+        6, its classification done), the step converges (5) or fails (4); the Newton
+        matrices are factorised here (:meth:`_factorise`) and kept per set as in
+        :meth:`_local_newton`.
+
+        Returns
+        -------
+        code, it, rounds, count, ns, npp
+        """
+        key, U, V, KVU, fS, rhoS, rhoP = block
+        m = U.size
+        xU, rV, D = np.empty(m), np.empty(V.size), np.zeros(m)
+        R, zs, zsn = np.empty(m), np.empty((fS.size, 2)), np.empty(fS.size)
+        lu = self._lus.get(key)
+        first, fresh, res_prev, stepped = True, False, np.inf, False
+        while True:
+            f_lu, piv = (lu[0], lu[1]) if lu is not None else (_NO_LU, _NO_PIV)
+            code, it, rounds, res_prev, stepped, count, ns, npp = slip_rounds(
+                self.K, x, r, x0, self.f, self.rho_t, self.rho_n, modes, fix_t, fix_n, slip,
+                sep, U, V, first, fixed, xU, rV, D, fS, rhoS, KVU, f_lu, piv,
+                lu is not None, fresh, it, rounds, self.max_iter, res_prev, stepped,
+                self.force_tol, self.chord_rate, R, zs, zsn)
+            if code != 3:
+                return code, it, rounds, count, ns, npp
+            lu = self._factorise(0, block, None, zs, zsn, rV[m:])
+            if lu is None:
+                return 4, it + 1, rounds, 0, 0, 0
+            first, fresh = False, True
 
     def _active_block(self, S: np.ndarray, P: np.ndarray):
         """Unknowns U of the slipping (t1, t2) and separated (t1, t2, n) nodes, the rows
