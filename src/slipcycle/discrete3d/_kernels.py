@@ -445,6 +445,27 @@ def slip_jacobian(KVU, ns, npp, phi, nvec, fS, rhoS):  # pragma: no cover - comp
 
 
 @njit(cache=True, nogil=True)
+def _slip_start(x0, U, ns):  # pragma: no cover - compiled
+    """Slips (ns, 2) at the start of the step of the slipping nodes, whose unknowns are
+    the first 2 ns entries of U."""
+    v0S = np.empty((ns, 2))
+    for i in range(ns):
+        v0S[i, 0] = x0[U[2 * i]]
+        v0S[i, 1] = x0[U[2 * i + 1]]
+    return v0S
+
+
+@njit(cache=True, nogil=True)
+def _apply_change(K, U, D, x, r):  # pragma: no cover - compiled
+    """x[U] += D and r += K[:, U] D if D ≠ 0; whether it is."""
+    for k in range(D.size):
+        if D[k] != 0.0:
+            add_at(K, U, D, x, r)
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
 def active_newton(kind, K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU, lu, piv,
                   W, KSP, phi, nvec, y, has_lu, fresh, it, max_iter, res_prev, stepped,
                   force_tol, chord_rate, R, zs, zsn):  # pragma: no cover - compiled
@@ -467,21 +488,11 @@ def active_newton(kind, K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU
             xU[k] = x[U[k]]
         for k in range(V.size):
             rV[k] = r[V[k]]
-    v0S = np.empty((ns, 2))
-    for i in range(ns):
-        v0S[i, 0] = x0[U[2 * i]]
-        v0S[i, 1] = x0[U[2 * i + 1]]
+    v0S = _slip_start(x0, U, ns)
     status, it, res_prev, stepped = chord_newton(
         kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, lu, piv, W, KSP, phi, nvec, y,
         has_lu, fresh, it, max_iter, res_prev, stepped, force_tol, chord_rate, R, zs, zsn)
-    moved = False
-    if status <= 2:
-        for k in range(D.size):
-            if D[k] != 0.0:
-                moved = True
-                break
-        if moved:
-            add_at(K, U, D, x, r)
+    moved = status <= 2 and _apply_change(K, U, D, x, r)
     return status, it, res_prev, stepped, moved
 
 
@@ -517,10 +528,7 @@ def slip_rounds(K, x, r, x0, f, rho_t, rho_n, modes, fix_t, fix_n, slip, sep, U,
     no_phi = np.empty((0, 2, 2))
     no_nvec = np.empty((0, 2))
     no_p = np.empty(0)
-    v0S = np.empty((ns, 2))
-    for i in range(ns):
-        v0S[i, 0] = x0[U[2 * i]]
-        v0S[i, 1] = x0[U[2 * i + 1]]
+    v0S = _slip_start(x0, U, ns)
     while True:
         if first:
             for k in range(U.size):
@@ -535,13 +543,7 @@ def slip_rounds(K, x, r, x0, f, rho_t, rho_n, modes, fix_t, fix_n, slip, sep, U,
             chord_rate, R, zs, zsn)
         if status >= 3:
             return status, it, rounds, res_prev, stepped, 0, 0, 0
-        moved = False
-        for k in range(D.size):
-            if D[k] != 0.0:
-                moved = True
-                break
-        if moved:
-            add_at(K, U, D, x, r)
+        moved = _apply_change(K, U, D, x, r)
         if status == 0 and not fixed and not moved:
             return 5, it, rounds, res_prev, stepped, 0, 0, 0
         if not (it < max_iter and rounds < max_iter):
