@@ -6,7 +6,11 @@ the temporaries of the array form. The Newton iteration of a load step touches o
 rows of the dense stiffness K (3N × 3N, symmetric) belonging to the active (slipping and
 separated) nodes; these loops read those rows in place instead of copying them out with
 NumPy fancy indexing, whose temporary copy of an m × 3N block costs more than the
-arithmetic.
+arithmetic. The Newton rounds themselves (the chord iterations with the kept LU factors,
+the update of every reaction, the classification of the next round) and the step
+control's bookkeeping are compiled too: with small active sets the cost of a load step
+was the interpreter's, not the arithmetic's. Python keeps the caches per active set and
+calls LAPACK to factorise a new Newton matrix.
 """
 
 from __future__ import annotations

@@ -21,7 +21,9 @@ reused (chord steps) over the iterations and the following steps while the resid
 falls at least fourfold per step, so that most steps need no factorisation; the two half
 steps of the step control start from the full step's solution (its midpoint, its end),
 a predictor that leaves the solution unchanged. A step costs O(N m) for the reaction
-update and O(m²) per iteration, plus O(m³) when the active set is new.
+update and O(m²) per iteration, plus O(m³) when the active set is new. The rounds and
+iterations run compiled (:mod:`~slipcycle.discrete3d._kernels`); Python picks the cached
+block of an active set and factorises new Newton matrices.
 
 Step control (step doubling, as for ODE integrators): each load interval is solved as one
 step and as two half steps; if the end states differ by more than ``step_tol`` × the
