@@ -48,6 +48,7 @@ from slipcycle.joints.lap_joint_protocol import (
     standard_protocol,
 )
 from slipcycle.joints.lap_joint_result import LapJointResult
+from slipcycle.joints.lap_joint_showcase import WindowOptions, lap_joint_showcase
 from slipcycle.joints.lap_joint_study import StudySettings, lap_joint_study
 from slipcycle.loading.protocol import read_step
 
@@ -56,7 +57,7 @@ __all__ = ["LapJointCase", "read_lap_joint_case", "joint_contact", "solve_model"
 
 FIELD_FORMATS = ("xdmf", "pvd")
 #: keys of ``[lap_joint]`` that are not fields of LapJoint
-_STUDY_KEYS = ("friction", "accept_ill_posed")
+_STUDY_KEYS = ("friction", "accept_ill_posed", "melan_check")
 
 
 @dataclass(frozen=True)
@@ -74,6 +75,10 @@ class LapJointCase:
         convergence; empty: the joint's mesh only.
     fields : tuple of str
         Field formats written per protocol (``"xdmf"``, ``"pvd"``).
+    melan_check : bool
+        Also run every protocol with B = 0 (``[lap_joint] melan_check``).
+    window : WindowOptions or None
+        The shakedown window of the protocols on every mesh (``[lap_joint.window]``).
     """
 
     joint: typing.Any
@@ -81,6 +86,8 @@ class LapJointCase:
     settings: StudySettings
     coarsening: tuple = ()
     fields: tuple = ("xdmf",)
+    melan_check: bool = False
+    window: WindowOptions | None = None
 
     def __post_init__(self):
         factors = tuple(float(f) for f in self.coarsening)
@@ -225,6 +232,26 @@ def _read_protocols(ps: Section, joint) -> tuple:
     return tuple(protocols)
 
 
+def _read_window(ws: Section | None, n_meshes: int) -> WindowOptions | None:
+    """``[lap_joint.window]``: ``lam_points`` (5), ``lam_max`` [N] (1.1 × the largest
+    λ2), ``lam_tol`` (0.05), ``meshes`` (every mesh; 0 the coarsest)."""
+    if ws is None:
+        return None
+    lam_max = ws.float("lam_max", None, gt=0.0)
+    meshes = ws.raw("meshes", None)
+    if meshes is not None and (
+            not isinstance(meshes, list) or not meshes or len(set(meshes)) != len(meshes)
+            or any(isinstance(m, bool) or not isinstance(m, int) or not 0 <= m < n_meshes
+                   for m in meshes)):
+        raise ws.error("meshes", f"must be distinct mesh numbers in 0 … {n_meshes - 1} "
+                                 f"(0 the coarsest), got {meshes!r}")
+    opts = WindowOptions(lam_points=ws.int("lam_points", 5, ge=2), lam_max=lam_max,
+                         lam_tol=ws.float("lam_tol", 0.05, gt=0.0, le=1.0),
+                         meshes=None if meshes is None else tuple(sorted(meshes)))
+    ws.finish()
+    return opts
+
+
 def read_lap_joint_case(case: Case) -> LapJointCase:
     """Read and validate every key of a ``lap_joint`` case; no computation beyond checks.
 
@@ -247,8 +274,11 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
     ld = sec.table("loading")
     ps = sec.table("protocols", {})
     cv = sec.table("convergence", {})
+    melan = sec.bool("melan_check", False)
+    ws = sec.table("window", None)
     geometry = Section({k: v for k, v in sec.data.items()
-                        if k not in ("loading", "protocols", "convergence", *_STUDY_KEYS)},
+                        if k not in ("loading", "protocols", "convergence", "window",
+                                     *_STUDY_KEYS)},
                        sec.prefix, sec.base_dir)
     joint = _read_joint(geometry)
     geometry.finish()
@@ -264,6 +294,7 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
         raise cv.error("coarsening", f"factors must be distinct, got {coarsening.tolist()}")
     rtol = cv.float("rtol", 0.05, gt=0.0, lt=1.0)
     cv.finish()
+    window = _read_window(ws, coarsening.size + 1)
 
     rn = case.section("run", required=False)
     run = {"cycles": rn.int("cycles", 40, ge=1),
@@ -285,7 +316,7 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
                              run=run, difference_tol=difference_tol, mesh_rtol=rtol,
                              accept_ill_posed=accept)
     return LapJointCase(joint, protocols, settings, tuple(coarsening.tolist()),
-                        tuple(fields))
+                        tuple(fields), melan_check=melan, window=window)
 
 
 def coarser_joint(joint, factor: float):
@@ -344,6 +375,10 @@ def solve_model(lc: LapJointCase, *, progress=None) -> LapJointResult:
                         "fine), not strictly decreasing: the holes and washers fix the "
                         "coarsest mesh; use a smaller mesh_size or refine = 1 with "
                         "coarsening = [2.0]")
+    if lc.melan_check or lc.window is not None:
+        return lap_joint_showcase(contacts, lc.protocols, lc.settings,
+                                  melan_check=lc.melan_check, window=lc.window,
+                                  fields=lc.fields, progress=progress)
     return lap_joint_study(contacts, lc.protocols, lc.settings, fields=lc.fields,
                            progress=progress)
 

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-__all__ = ["report_markdown", "verdict"]
+__all__ = ["report_markdown", "verdict", "showcase_markdown"]
 
 FIGURES = ("dissipation_by_protocol", "slip_maps", "dissipation_maps",
            "dissipation_by_bolt", "dissipation_history")
@@ -187,3 +187,63 @@ def _bolt_table(result) -> list[str]:
                      f"{', '.join(f'{x:.6g}' for x in lo[j])} | "
                      f"{', '.join(f'{x:.6g}' for x in hi[j])} |")
     return [*lines, ""]
+
+
+def showcase_markdown(result) -> str:
+    """The showcase sections of the report (:class:`~slipcycle.joints.lap_joint_showcase.
+    LapJointShowcase`): the B = 0 check per protocol and mesh, and the shakedown window."""
+    from slipcycle.joints.lap_joint_result import _spread  # (the module imports this one)
+
+    lines = ["", ""]
+    d = result.decoupled
+    if d is not None:
+        sp = result.mesh.spacing
+        lines += ["## B = 0: one answer for every protocol", "",
+                  "The same protocols with the normal–tangential coupling removed (B = 0): "
+                  "by the frictional Melan converse every protocol that ends with the same "
+                  "loads has one steady dissipation (Klarbring, Ciavarella & Barber 2007); "
+                  "with elastic bolts only the bolt forces the assembly leaves can differ.",
+                  "", "| protocol | " + " | ".join(
+                      f"D at h = {h * 1e3:.3g} mm [µJ] | D with B = 0 [µJ]" for h in sp)
+                  + " | bolt forces with B = 0 [N] |",
+                  "|---|" + "---|---|" * len(sp) + "---|"]
+        for j, p in enumerate(result.protocols):
+            vals = " | ".join(f"{1e6 * result.mesh.dissipation[m, j]:.5g} | "
+                              f"{1e6 * d.mesh.dissipation[m, j]:.5g}" for m in range(len(sp)))
+            forces = ", ".join(f"{x:.6g}" for x in d.bolt_force[j])
+            lines.append(f"| {p.name} | {vals} | {forces} |")
+        spreads = [_spread(result.mesh.dissipation[m]) for m in range(len(sp))]
+        spreads0 = [_spread(d.mesh.dissipation[m]) for m in range(len(sp))]
+        lines += ["", "Spread (max − min)/max over the protocols, per mesh (coarse → fine): "
+                  f"coupled {', '.join(f'{100 * x:.3g} %' for x in spreads)}; B = 0 "
+                  f"{', '.join(f'{100 * x:.3g} %' for x in spreads0)}.", ""]
+    if result.windows:
+        k = len(result.protocols)
+        lines += ["## Shakedown window", "",
+                  "Per mesh: λ2 with separation of each protocol's assembled state and the "
+                  "bracket of the largest service amplitude at which it shakes down (the "
+                  "engine on the amplitude grid, then bisected); λ1 is where every "
+                  "protocol shakes down, the class window where one shakes down and "
+                  "another slips (Barber 2012, §3).", "",
+                  "| mesh h [mm] | protocol | λ2 [N] | shakes down at [N] | slips at [N] |",
+                  "|---|---|---|---|---|"]
+        for h, w in zip(result.window_spacing, result.windows, strict=True):
+            for j in range(k):
+                lo, hi = w.limits[j]
+                lines.append(f"| {h * 1e3:.3g} | {w.labels[j]} | {w.lambda2[j]:.5g} | "
+                             f"{lo:.5g} | {_g(float(hi), 5)} |")
+        lines.append("")
+        proto = result.protocol_class_window()
+        for i, (h, w) in enumerate(zip(result.window_spacing, result.windows, strict=True)):
+            win, pw = w.class_window, proto[i]
+            a, b = w.lambda1_bracket
+            lines.append(f"- h = {h * 1e3:.3g} mm: λ1 in [{a:.5g}, {_g(b, 5)}] N; class "
+                         "window " + ("none" if win is None else
+                                      f"[{win[0]:.5g}, {win[1]:.5g}] N")
+                         + " (the protocols and the safe state), between the protocols "
+                         + ("none" if pw is None else f"[{pw[0]:.5g}, {pw[1]:.5g}] N")
+                         + f" (figure `shakedown_map_mesh{i}`).")
+        lines += [""] + [f"![shakedown_map_mesh{i}](figures/shakedown_map_mesh{i}.png)"
+                         for i in range(len(result.windows))] + [""]
+    return "\n".join(lines)
+

@@ -23,7 +23,7 @@ from slipcycle.discrete3d.shakedown_window import (
 )
 from slipcycle.io import Case
 from slipcycle.joints.lap_joint_case import joint_contact, read_lap_joint_case
-from slipcycle.joints.lap_joint_protocol import assemble
+from slipcycle.joints.lap_joint_showcase import protocol_subjects
 from slipcycle.sweep.dataset import StudyStatus
 
 __all__ = ["LapJointShakedown", "lap_joint_subjects", "lap_joint_shakedown",
@@ -41,18 +41,8 @@ def lap_joint_subjects(case: Case) -> tuple[list[Subject], dict]:
     """One :class:`Subject` per protocol of a ``lap_joint`` case (its finest mesh), and
     the engine settings of the case's ``[run]``."""
     lc = read_lap_joint_case(case)
-    st = lc.settings
-    contact = joint_contact(lc.joint)
-    run = dict(st.run)
-    subjects = []
-    for proto in lc.protocols:
-        asm = assemble(contact, proto, st.preload, st.friction, run["step_tol"])
-        start = ({"initial_slip": asm.initial_slip.reshape(-1, 2)}
-                 if asm.initial_slip is not None else
-                 {"protocol": asm.protocol} if asm.protocol is not None else {})
-        subjects.append(Subject(proto.name, asm.system(contact, st.friction,
-                                                       st.accept_ill_posed),
-                                asm.load(1.0), start))
+    subjects = protocol_subjects(joint_contact(lc.joint), lc.protocols, lc.settings)
+    run = dict(lc.settings.run)
     return subjects, run
 
 
