@@ -183,9 +183,10 @@ def test_slip_is_nearly_parallel_to_the_load_cattaneo_mindlin_residual():
     assert slip_vs_traction.max() < 12.0 and np.average(slip_vs_traction, weights=s) < 5.0
 
 
+@functools.cache
 def _loss(h):
     """Cycle the cap top between ±d (16 load steps per cycle) on the mesh h: (W_FE [J],
-    W_MD at the measured Q* and P [J], Q*/fP)."""
+    W_MD at the measured Q* and P [J], Q*/fP); cached: two tests use h = 140 µm."""
     red, area, system = sphere(h)
     N = red.C.shape[0]
     evo, base, P, _, _ = normal_contact(h)
