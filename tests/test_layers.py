@@ -104,3 +104,17 @@ def test_command_modules_only_parse_call_and_print():
     for path in sorted((SRC / "cli").glob("cmd_*.py")):
         lines = len(path.read_text(encoding="utf-8").splitlines())
         assert lines <= 130, f"{path.name} has {lines} lines"
+
+
+def test_section_bookkeeping_is_written_only_by_section():
+    """The keys a ``Section`` has read (``_used``, which ``finish`` checks) are its own:
+    readers mark a key through ``Section.raw`` or ``Section.accept``, never by writing the
+    set from outside the class."""
+    offenders = []
+    for path in sorted(SRC.rglob("*.py")):
+        own = path == SRC / "io" / "case.py"
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Attribute) and node.attr == "_used":
+                if not (own and isinstance(node.value, ast.Name) and node.value.id == "self"):
+                    offenders.append(f"{path.relative_to(SRC)}:{node.lineno}")
+    assert not offenders, offenders

@@ -172,13 +172,12 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     run = RunSettings(**run_settings(rn, step_tol=("step_tolerance", step_tolerance),
                                      replay=("replay", lambda s, k: s.bool(k, False))))
     out = case.section("output", required=False)
-    fields = out.data.get("fields", list(FIELD_FORMATS))
+    fields = out.raw("fields", list(FIELD_FORMATS))
     if isinstance(fields, str):
         fields = [fields]
     if not isinstance(fields, list) or any(f not in FIELD_FORMATS for f in fields):
         raise out.error("fields", f"must be a list of {', '.join(FIELD_FORMATS)} (or [] for "
                                   f"no field files), got {fields!r}")
-    out._used.add("fields")
     case.finish()
 
     try:
