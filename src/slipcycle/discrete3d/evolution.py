@@ -888,7 +888,10 @@ class Evolution3D:
                 self._totals.events += 1
             self._leaves.append((fa, fb, depth, "L", ()))
             self._interval(rwa, rws, step, depth, fa=fa, fb=fs, at_event=True)
-            self._interval(rws, rwb, None, depth, fa=fs, fb=fb, at_event=at_event)
+            # the whole step's end (same end load, so its reactions are consistent) is
+            # the predictor of the rest: the solution does not depend on it
+            self._interval(rws, rwb, None, depth, (full.x, full.r), fa=fs, fb=fb,
+                           at_event=at_event)
             return
         if full is not None and (not self.adaptive or self._exact(full)):
             self._leaves.append((fa, fb, depth, "E", (full.modes,)))
