@@ -192,8 +192,6 @@ def _bolt_table(result) -> list[str]:
 def showcase_markdown(result) -> str:
     """The showcase sections of the report (:class:`~slipcycle.joints.lap_joint_showcase.
     LapJointShowcase`): the B = 0 check per protocol and mesh, and the shakedown window."""
-    from slipcycle.joints.lap_joint_result import _spread  # (the module imports this one)
-
     lines = ["", ""]
     d = result.decoupled
     if d is not None:
@@ -212,8 +210,7 @@ def showcase_markdown(result) -> str:
                               f"{1e6 * d.mesh.dissipation[m, j]:.5g}" for m in range(len(sp)))
             forces = ", ".join(f"{x:.6g}" for x in d.bolt_force[j])
             lines.append(f"| {p.name} | {vals} | {forces} |")
-        spreads = [_spread(result.mesh.dissipation[m]) for m in range(len(sp))]
-        spreads0 = [_spread(d.mesh.dissipation[m]) for m in range(len(sp))]
+        spreads, spreads0 = result.mesh_spreads()
         lines += ["", "Spread (max − min)/max over the protocols, per mesh (coarse → fine): "
                   f"coupled {', '.join(f'{100 * x:.3g} %' for x in spreads)}; B = 0 "
                   f"{', '.join(f'{100 * x:.3g} %' for x in spreads0)}.", ""]

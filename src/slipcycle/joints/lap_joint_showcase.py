@@ -32,7 +32,7 @@ import xarray as xr
 
 from slipcycle.discrete3d.shakedown_window import Subject, shakedown_window
 from slipcycle.joints.lap_joint_protocol import JointContact, StudySettings, assemble
-from slipcycle.joints.lap_joint_result import LapJointResult
+from slipcycle.joints.lap_joint_result import LapJointResult, _spread
 from slipcycle.joints.lap_joint_study import lap_joint_study
 
 __all__ = ["WindowOptions", "LapJointShowcase", "protocol_subjects", "lap_joint_showcase"]
@@ -158,6 +158,13 @@ class LapJointShowcase(LapJointResult):
     def decoupled_spread(self) -> float | None:
         """(max − min)/max of the B = 0 dissipation over the protocols, finest mesh."""
         return None if self.decoupled is None else self.decoupled.dissipation_spread
+
+    def mesh_spreads(self) -> tuple[list, list]:
+        """(max − min)/max of the dissipation over the protocols on each mesh, coupled
+        and with B = 0 (coarse → fine)."""
+        d0 = self.decoupled
+        return ([_spread(x) for x in self.mesh.dissipation],
+                [] if d0 is None else [_spread(x) for x in d0.mesh.dissipation])
 
     def window_limits(self) -> np.ndarray:
         """(meshes, protocols, 2): each protocol's shakedown-limit bracket [N]."""
