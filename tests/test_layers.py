@@ -10,6 +10,7 @@ from __future__ import annotations
 import ast
 import contextlib
 import io
+import logging
 import os
 from pathlib import Path
 
@@ -22,12 +23,31 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src" / "slipcycle"
 
 
+@contextlib.contextmanager
+def _logging_kept():
+    """Restore the logging state: import-linter configures logging with
+    ``disable_existing_loggers``, which silenced the ``slipcycle`` logger (the CLI's -v
+    diagnostics) for every later test of the same process."""
+    loggers = [lg for lg in logging.root.manager.loggerDict.values()
+               if isinstance(lg, logging.Logger)]
+    state = [(lg, lg.disabled, lg.level, lg.propagate, list(lg.handlers)) for lg in loggers]
+    root = (logging.root.level, list(logging.root.handlers))
+    try:
+        yield
+    finally:
+        for lg, disabled, level, propagate, handlers in state:
+            lg.disabled, lg.propagate, lg.handlers = disabled, propagate, handlers
+            lg.setLevel(level)
+        logging.root.handlers = root[1]
+        logging.root.setLevel(root[0])
+
+
 def test_import_contracts_are_kept():
     out = io.StringIO()
     cwd = os.getcwd()
     try:
         os.chdir(ROOT)
-        with contextlib.redirect_stdout(out):
+        with contextlib.redirect_stdout(out), _logging_kept():
             status = lint_imports(config_filename=str(ROOT / "pyproject.toml"),
                                   no_cache=True, no_logo=True)
     finally:
