@@ -131,8 +131,13 @@ def test_2d_engines_agree_on_the_class_whatever_the_preload(eps, clamp, tol):
     system, load = _system2(), _load2(F, clamp)
     # the start every steady cycle passes through: node 0 at its limit at θ = 0
     start = np.array([(F_COEF * P - F) / K, 0.0])
-    res = simulate(system, load, cycles=20, steps_per_cycle=16, tol=tol, initial_slip=start)
-    fast = steady_state_fast(system, load, start, cycles=20, steps_per_cycle=16, tol=tol)
+    # min_cycles: the steady-state test is still measured against the whole load (clamp
+    # included), so one cycle could pass it before node 0's slip settles; this test is
+    # about the class, the convergence scale is a known open item (issue 33 note)
+    res = simulate(system, load, cycles=20, steps_per_cycle=16, tol=tol, initial_slip=start,
+                   min_cycles=3)
+    fast = steady_state_fast(system, load, start, cycles=20, steps_per_cycle=16, tol=tol,
+                             min_cycles=3)
     assert res.steady_state == fast["steady_state"] == "cyclic_slip"
     assert res.slip_length[0] == pytest.approx(_slip(eps), rel=1e-6)
     assert res.slipping_nodes == [0]

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from slipcycle.coupled.settings import SolverStats
-from slipcycle.loading.service import service_slip_tolerance
+from slipcycle.loading.service import service_slip_tolerance, slips_in_cycle
 from slipcycle.result import SteadyState
 
 __all__ = ["CycleSolution", "CYCLE_CLASSES", "last_cycle", "slip_tolerance"]
@@ -174,9 +174,13 @@ def last_cycle(system, state: str, ratchet: np.ndarray, totals, starts: list, to
     n, m = system.n_nodes, starts[-1].size
     slip_tol = slip_tolerance(tol, disp_scale, samples, system.stiffness_scale())
     r_w0 = samples[0]
-    slipping = np.flatnonzero(totals.slip_length > slip_tol)
+    # each node's net tangential movement over the cycle (2-D: one slip, 3-D: two)
+    drift = np.abs(starts[-1][:m - n] - starts[-2][:m - n]).reshape(n, -1)
+    moves = slips_in_cycle(totals.slip_length, np.linalg.norm(drift, axis=1), slip_tol,
+                           state == "ratcheting")
+    slipping = np.flatnonzero(moves)
     separating = np.flatnonzero(totals.separated)
-    stuck = np.flatnonzero((totals.slip_length <= slip_tol) & ~totals.separated)
+    stuck = np.flatnonzero(~moves & ~totals.separated)
     if state == "steady":
         state = "shakedown" if slipping.size == 0 else "cyclic_slip"
     if state != "ratcheting":

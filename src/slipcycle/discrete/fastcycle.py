@@ -28,7 +28,7 @@ from numba import njit, prange
 
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
-from slipcycle.loading.service import service_slip_tolerance
+from slipcycle.loading.service import service_slip_tolerance, slips_in_cycle
 
 __all__ = ["steady_state_fast", "steady_states_batch", "FAST_CODES"]
 
@@ -265,7 +265,10 @@ def steady_state_fast(system: FrictionalSystem, load: DiscreteLoad, initial_slip
         np.ascontiguousarray(system.friction, dtype=float), theta,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), v0,
         int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale)
-    slipping = slen > service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale)
+    slipping = slips_in_cycle(
+        slen, np.abs(ratchet),
+        service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale),
+        code == RATCHET)
     if code == STEADY:
         state = "shakedown" if not slipping.any() else "cyclic_slip"
     else:
@@ -287,8 +290,9 @@ def _batch(A, B, f, theta, qw, pw, V0, cycles, tol, min_cycles, force_tol, disp_
     slen = np.zeros((m, n))
     erased = np.zeros(m, np.bool_)
     vend = np.zeros((m, n))
+    drift = np.zeros((m, n))
     for i in prange(m):
-        c, k, r, d, s, e, v, _, _ = _kernel(A, B, f, theta, qw, pw, V0[i].copy(), cycles, tol,
+        c, k, r, d, s, e, v, dr, _ = _kernel(A, B, f, theta, qw, pw, V0[i].copy(), cycles, tol,
                                             min_cycles, force_tol, disp_scale)
         codes[i] = c
         ncyc[i] = k
@@ -297,7 +301,8 @@ def _batch(A, B, f, theta, qw, pw, V0, cycles, tol, min_cycles, force_tol, disp_
         slen[i] = s
         erased[i] = e
         vend[i] = v
-    return codes, ncyc, resid, diss, slen, erased, vend
+        drift[i] = dr
+    return codes, ncyc, resid, diss, slen, erased, vend, drift
 
 
 def steady_states_batch(system: FrictionalSystem, load: DiscreteLoad, V0, *,
@@ -324,12 +329,14 @@ def steady_states_batch(system: FrictionalSystem, load: DiscreteLoad, V0, *,
     F = float(np.max(np.abs(vals), initial=0.0)) or 1.0
     disp_scale = F / float(np.max(np.diag(system.K)))
     V0 = np.ascontiguousarray(np.atleast_2d(np.asarray(V0, float)))
-    codes, ncyc, resid, diss, slen, erased, vend = _batch(
+    codes, ncyc, resid, diss, slen, erased, vend, drift = _batch(
         np.ascontiguousarray(system.A), np.ascontiguousarray(system.B),
         np.ascontiguousarray(system.friction, dtype=float), theta,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), V0,
         int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale)
-    slipping = slen > service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale)
+    slip_tol = service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale)
+    slipping = np.array([slips_in_cycle(slen[i], np.abs(drift[i]), slip_tol, c == RATCHET)
+                         for i, c in enumerate(codes)]).reshape(slen.shape)
     states = np.array([FAST_CODES[int(c)] for c in codes], dtype=object)
     steady = codes == STEADY
     states[steady] = np.where(slipping[steady].any(axis=1), "cyclic_slip", "shakedown")

@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["service_displacement_scale", "cycle_slip_tolerance", "service_slip_tolerance"]
+__all__ = ["service_displacement_scale", "cycle_slip_tolerance", "service_slip_tolerance",
+           "slips_in_cycle"]
 
 
 def service_displacement_scale(samples: np.ndarray, stiffness_scale: float) -> float:
@@ -96,3 +97,44 @@ def service_slip_tolerance(tol: float, samples: np.ndarray, stiffness_scale: flo
     """
     return cycle_slip_tolerance(tol, service_displacement_scale(samples, stiffness_scale),
                                 disp_scale)
+
+
+#: a node slips in the cycle only if its slip length exceeds this multiple of its net
+#: movement over the cycle: a node creeping monotonically towards a stuck limit has slip
+#: length equal to its net movement (factor 1), one that slips back and forth has more
+CREEP_FACTOR = 2.0
+
+
+def slips_in_cycle(slip_length: np.ndarray, drift: np.ndarray, slip_tol: float,
+                   ratcheting: bool = False) -> np.ndarray:
+    """Which nodes slip in the last cycle run (the ``slipping_nodes`` of every run).
+
+    A node slips when its slip length over the cycle exceeds ``slip_tol``
+    (:func:`service_slip_tolerance`) and, unless the state ratchets, also
+    :data:`CREEP_FACTOR` × its net movement over the cycle: a run stopped before its limit
+    (or one whose convergence test is measured against a much larger preload) still has
+    nodes creeping geometrically towards their stuck state, each cycle by the same small
+    amount in the same direction; they are stuck in the limit, and their slip is the
+    convergence error, not cyclic slip. A ratcheting node moves on every cycle by its
+    drift and counts as slipping by its slip length alone.
+
+    Parameters
+    ----------
+    slip_length : (N,) array
+        Slip length of each node over the last cycle [m].
+    drift : (N,) array
+        Norm of each node's tangential start-of-cycle change over that cycle [m].
+    slip_tol : float
+        [m].
+    ratcheting : bool
+        The run's state ratchets.
+
+    Returns
+    -------
+    (N,) bool array
+    """
+    slip_length = np.asarray(slip_length, float)
+    slipping = slip_length > slip_tol
+    if not ratcheting:
+        slipping &= slip_length > CREEP_FACTOR * np.asarray(drift, float)
+    return slipping
