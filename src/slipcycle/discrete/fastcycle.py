@@ -335,8 +335,7 @@ def steady_states_batch(system: FrictionalSystem, load: DiscreteLoad, V0, *,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), V0,
         int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale)
     slip_tol = service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale)
-    slipping = np.array([slips_in_cycle(slen[i], np.abs(drift[i]), slip_tol, c == RATCHET)
-                         for i, c in enumerate(codes)]).reshape(slen.shape)
+    slipping = slips_in_cycle(slen, np.abs(drift), slip_tol, codes == RATCHET)
     states = np.array([FAST_CODES[int(c)] for c in codes], dtype=object)
     steady = codes == STEADY
     states[steady] = np.where(slipping[steady].any(axis=1), "cyclic_slip", "shakedown")

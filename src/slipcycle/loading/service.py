@@ -120,21 +120,21 @@ def slips_in_cycle(slip_length: np.ndarray, drift: np.ndarray, slip_tol: float,
 
     Parameters
     ----------
-    slip_length : (N,) array
-        Slip length of each node over the last cycle [m].
-    drift : (N,) array
+    slip_length : (N,) or (M, N) array
+        Slip length of each node over the last cycle [m] (of M runs).
+    drift : (N,) or (M, N) array
         Norm of each node's tangential start-of-cycle change over that cycle [m].
     slip_tol : float
         [m].
-    ratcheting : bool
-        The run's state ratchets.
+    ratcheting : bool or (M,) bool array
+        The run's state ratchets (each run's).
 
     Returns
     -------
-    (N,) bool array
+    (N,) or (M, N) bool array
     """
     slip_length = np.asarray(slip_length, float)
-    slipping = slip_length > slip_tol
-    if not ratcheting:
-        slipping &= slip_length > CREEP_FACTOR * np.asarray(drift, float)
-    return slipping
+    beyond_creep = slip_length > CREEP_FACTOR * np.asarray(drift, float)
+    # (1,) or (M, 1): one flag per run, broadcast over its nodes
+    ratchets = np.expand_dims(np.asarray(ratcheting, bool), -1)
+    return (slip_length > slip_tol) & (beyond_creep | ratchets)
