@@ -128,3 +128,30 @@ def test_uncoupled_lambda1_bracket_contains_lambda2():
                          protocols=[load.with_lam(0.0)(np.zeros(1)), push], cycles=300)
     assert br.limits.shape == (2, 2)
     assert br.lower <= res.lambda2 * 1.01 and br.upper >= res.lambda2 * 0.99
+
+
+def test_cone_program_ties_each_contact_set_once_and_each_sample_row_is_sparse():
+    """The program scales to FE joints: the slip response of a contact set is one dense
+    block (its closed reactions and open gaps per slip), however many samples share the
+    set; every sample's cone or gap row touches λ and one entry of that response. Three
+    distinct sets over 24 samples: three blocks, and the optimum is the one the polygonal
+    LPs bracket."""
+    from slipcycle.discrete3d.shakedown import _open_rows
+
+    system, load = small()
+    res = lambda2_open(system, load, 24)
+    theta, _ = load.cycle_samples(24)
+    r0, r1 = load.split_lam(theta[:-1])
+    rows = _open_rows(system, r0, r1, res.open_set)
+    distinct = {s.tobytes() for s in res.open_set}
+    assert len(distinct) == 3
+    n = system.n_nodes
+    # one tie row per live entry of each distinct set's response (3 per closed node,
+    # 1 per open node, at most)
+    assert rows.A_tie.shape[0] <= 3 * n * len(distinct)
+    assert rows.n_vars == 2 * n + 1 + rows.A_tie.shape[0]
+    assert rows.G_cone.getnnz(axis=1).max() <= 2 and rows.G_gap.getnnz(axis=1).max() <= 2
+    closed = (~res.open_set).sum()
+    assert rows.G_cone.shape[0] == 3 * closed and rows.G_gap.shape[0] == res.open_set.sum()
+    lo, hi = lambda2_polygonal(system, load, res.open_set, 256, 24)
+    assert lo <= res.lambda2 * (1 + 1e-7) and res.lambda2 <= hi * (1 + 1e-7)

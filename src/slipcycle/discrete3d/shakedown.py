@@ -28,7 +28,12 @@ solution (first with the assembly's slip at λ = 0, then with the program's safe
 rather than made unknowns, which keeps the program convex; at the fixed point its safe
 state is certified by a fresh elastic solution. A node that changes state inside a load
 interval makes the sampled program approximate: it converges at second order in the
-sample spacing (tested). :func:`lambda2_polygonal` brackets the cone program by two
+sample spacing (tested). The program is sparse: the slip response of a contact set (its
+closed nodes' reactions and open nodes' gaps per slip, a Schur complement of K) is a
+variable tied to v once per distinct set, and each sample's cone touches three entries
+of it and λ, so the dense part grows with the distinct sets, not with the samples (a
+joint whose sets do not change over the cycle has one dense block however finely the
+cycle is sampled). :func:`lambda2_polygonal` brackets the cone program by two
 linear programs (inscribed and circumscribed polygons, HiGHS), and
 :func:`lambda1_bracket` brackets λ1 (every start shakes down below it) by simulation.
 
@@ -123,11 +128,11 @@ def lambda2_socp(system: FrictionalSystem3D, load: Load3D, steps_per_cycle: int 
     theta = theta[:-1]
     r0, r1 = load.split_lam(theta)
     closed = np.zeros((theta.size, n), bool)
-    status, y = _socp(*_open_rows(system, r0, r1, closed), lam_max, tol)
+    status, y = _socp(_open_rows(system, r0, r1, closed), lam_max, tol)
     if y is None:
         return SafeRegion3D(0.0, np.zeros((n, 2)), False, status, theta.size)
-    v = y[:-1] * _scales(system, r0, r1)[1]
-    return SafeRegion3D(float(y[-1]), v.reshape(n, 2), True, status, theta.size)
+    v = y[:2 * n] * _scales(system, r0, r1)[1]
+    return SafeRegion3D(float(y[2 * n]), v.reshape(n, 2), True, status, theta.size)
 
 
 def is_safe(system: FrictionalSystem3D, load: Load3D, v: np.ndarray,
@@ -195,51 +200,112 @@ def _scales(system: FrictionalSystem3D, r0: np.ndarray, r1: np.ndarray):
     return fs, fs / max(float(np.max(np.diag(system.K))), 1e-300)
 
 
+@dataclass(frozen=True)
+class _Rows:
+    """The cone program of a set of contact sets, sparse.
+
+    Variables y = [v / slip_scale (2N), λ, z]: z holds, for each distinct contact set,
+    its *slip response* (the reactions of its closed nodes and the gaps of its open ones
+    per slip v, in force units), tied to v once by ``A_tie y = 0`` (one dense block per
+    distinct set). Each sample's rows then touch λ and three entries of z: gap rows
+    ``b_gap − G_gap y ≥ 0``, cone rows ``b_cone − G_cone y ∈ 𝒦³`` (three rows
+    (f p, q1, q2) per closed node and sample). Every row is divided by the force scale.
+    """
+
+    A_tie: sp.csr_matrix
+    G_gap: sp.csr_matrix
+    b_gap: np.ndarray
+    G_cone: sp.csr_matrix
+    b_cone: np.ndarray
+    n_slip: int
+
+    @property
+    def n_vars(self) -> int:
+        return self.A_tie.shape[1]
+
+
+def _set_block(system: FrictionalSystem3D, is_open: np.ndarray, fs: float, vs: float):
+    """Closed nodes c, load map L ((3k + m, 3N): reactions [q (2k), p (k)] of the closed
+    nodes and gaps of the m open ones per unit load, in force units) and slip map S
+    ((3k + m, 2N), per unit scaled slip) of one contact set."""
+    kd = max(float(np.max(np.diag(system.K))), 1e-300)
+    c, R_load, R_slip, W_load, W_slip = closed_rows(system, is_open)
+    # the gaps as forces (× max diag K), so that every row has the force scale
+    return c, np.vstack([R_load, kd * W_load]) / fs, np.vstack([R_slip, kd * W_slip]) * (
+        vs / fs)
+
+
 def _open_rows(system: FrictionalSystem3D, r0: np.ndarray, r1: np.ndarray,
-               sets: np.ndarray):
-    """Program rows with the contact sets ``sets`` (S, N), in scaled variables
-    y = [v / slip_scale (2N), λ]: gap rows ``b_gap − G_gap y ≥ 0`` and cone rows
-    ``b_cone − G_cone y ∈ 𝒦³`` ((m, 3) and (m, 3, 2N + 1): (f p, q1, q2) per closed node
-    and sample), all divided by the force scale."""
+               sets: np.ndarray) -> _Rows:
+    """:class:`_Rows` of the program with the contact sets ``sets`` (S, N) at the load
+    samples r0 + λ r1 ((S, 3N) each)."""
     n = system.n_nodes
     fs, vs = _scales(system, r0, r1)
-    kd = max(float(np.max(np.diag(system.K))), 1e-300)
-    cache: dict = {}
-    gaps, cones = [], []
+    blocks: dict = {}
+    ties, gaps, cones = [], [], []
+    n_z = 0
     for k, is_open in enumerate(sets):
         key = is_open.tobytes()
-        if key not in cache:
-            cache[key] = closed_rows(system, is_open)
-        c, R_load, R_slip, W_load, W_slip = cache[key]
+        if key not in blocks:
+            c, L, S = _set_block(system, is_open, fs, vs)
+            # a row that no slip moves (B = 0: the normal reactions) gets no variable
+            live = np.any(S != 0.0, axis=1)
+            col = 2 * n + 1 + n_z + np.cumsum(live) - 1
+            blocks[key] = (c, L, np.where(live, col, 0), live.astype(float))
+            ties.append(sp.coo_matrix(S[live]))
+            n_z += int(live.sum())
+        c, L, col, live = blocks[key]
+        a0, a1 = L @ r0[k], L @ r1[k]
         m = c.size
-        # the gaps as forces (× max diag K), so that every row has the force scale
-        a0 = kd * W_load @ r0[k] / fs
-        gaps.append(np.column_stack([a0, kd * vs * W_slip / fs, kd * W_load @ r1[k] / fs]))
         f = system.friction[c]
-        rows = np.column_stack([R_load @ r0[k] / fs, R_slip * vs / fs, R_load @ r1[k] / fs])
-        q, p = rows[:2 * m].reshape(m, 2, -1), rows[2 * m:]
-        cones.append(np.concatenate([(f[:, None] * p)[:, None], q], axis=1))
-    gap = np.concatenate(gaps) if gaps else np.zeros((0, 2 * n + 2))
-    cone = np.concatenate(cones)
-    return -gap[:, 1:], gap[:, 0], -cone[:, :, 1:], cone[:, :, 0]
+        node = np.arange(m)
+        # cone rows (f p, q1, q2) of each closed node: indices into a0, a1 and z
+        idx = np.stack([2 * m + node, 2 * node, 2 * node + 1], axis=1).reshape(-1)
+        w = np.stack([f, np.ones(m), np.ones(m)], axis=1).reshape(-1)
+        cones.append((w * a0[idx], w * a1[idx], w * live[idx], col[idx]))
+        g = np.arange(3 * m, a0.size)
+        gaps.append((a0[g], a1[g], live[g], col[g]))
+    nv = 2 * n + 1 + n_z
+    # S v − z = 0 per distinct set (the λ column empty)
+    tie = sp.hstack([sp.vstack(ties), sp.csr_matrix((n_z, 1)), -sp.identity(n_z)],
+                    format="csr")
+    G_gap, b_gap = _sparse_rows(gaps, 2 * n, nv)
+    G_cone, b_cone = _sparse_rows(cones, 2 * n, nv)
+    return _Rows(tie, G_gap, b_gap, G_cone, b_cone, 2 * n)
 
 
-def _socp(G_gap, b_gap, G_cone, b_cone, lam_max: float, tol: float):
-    """max λ over the rows of :func:`_open_rows` (Clarabel): (status, y or None)."""
-    nv = G_cone.shape[2]
-    Gb = np.zeros((2, nv))
-    Gb[0, -1], Gb[1, -1] = -1.0, 1.0
-    A = sp.csc_matrix(np.vstack([Gb, G_gap, G_cone.reshape(-1, nv)]))
-    b = np.concatenate([[0.0, lam_max], b_gap, b_cone.reshape(-1)])
-    cones = [clarabel.NonnegativeConeT(2 + b_gap.size)]
-    cones += [clarabel.SecondOrderConeT(3)] * b_cone.shape[0]
+def _sparse_rows(parts, lam_col: int, nv: int):
+    """Rows ``b − G y`` with G = −(λ coefficient, weight at one entry of z) from
+    (b, λ coefficient, weight, z column) arrays per sample: (G (csr), b)."""
+    if not parts:
+        return sp.csr_matrix((0, nv)), np.zeros(0)
+    b, a1, w, col = (np.concatenate(x) for x in zip(*parts, strict=True))
+    rows = np.arange(b.size)
+    G = sp.csr_matrix((np.concatenate([-a1, -w]),
+                       (np.concatenate([rows, rows]),
+                        np.concatenate([np.full(b.size, lam_col), col]))), shape=(b.size, nv))
+    G.eliminate_zeros()
+    return G, b
+
+
+def _socp(rows: _Rows, lam_max: float, tol: float):
+    """max λ over :class:`_Rows` (Clarabel): (status, y or None)."""
+    nv, ns = rows.n_vars, rows.n_slip
+    Gb = sp.csr_matrix(([-1.0, 1.0], ([0, 1], [ns, ns])), shape=(2, nv))
+    A = sp.vstack([rows.A_tie, Gb, rows.G_gap, rows.G_cone], format="csc")
+    b = np.concatenate([np.zeros(rows.A_tie.shape[0]), [0.0, lam_max], rows.b_gap,
+                        rows.b_cone])
+    cones = [clarabel.ZeroConeT(rows.A_tie.shape[0])] if rows.A_tie.shape[0] else []
+    cones += [clarabel.NonnegativeConeT(2 + rows.b_gap.size)]
+    cones += [clarabel.SecondOrderConeT(3)] * (rows.b_cone.size // 3)
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
     c = np.zeros(nv)
-    c[-1] = -1.0
-    # a tiny regularisation of v picks the safe state of least norm at λ2
-    P = sp.csc_matrix(sp.diags(np.concatenate([np.full(nv - 1, 1e-9), [0.0]])))
+    c[ns] = -1.0
+    # no quadratic term: with the ties as equality rows, a regularisation of v (least-norm
+    # safe state) stalls Clarabel's first iteration where λ is capped far above λ2
+    P = sp.csc_matrix((nv, nv))
     sol = clarabel.DefaultSolver(P, c, A, b, cones, settings).solve()
     status = str(sol.status)
     if "Infeasible" in status and "Dual" not in status:
@@ -301,10 +367,10 @@ def lambda2_open(system: FrictionalSystem3D, load: Load3D, steps_per_cycle: int 
     best, status, it = None, "", 0
     while it < max_updates:
         it += 1
-        status, y = _socp(*_open_rows(system, r0, r1, sets), lam_max, tol)
+        status, y = _socp(_open_rows(system, r0, r1, sets), lam_max, tol)
         if y is None:
             break
-        lam, v = float(y[-1]), y[:-1] * vs
+        lam, v = float(y[2 * n]), y[:2 * n] * vs
         certified = np.array_equal(_sets_or_none(system, r0 + lam * r1, v, sets), sets)
         if best is None or (certified, lam) > (best[3], best[0]):
             best = (lam, v, sets, bool(certified), status)
@@ -354,27 +420,30 @@ def lambda2_polygonal(system: FrictionalSystem3D, load: Load3D, open_set: np.nda
     """
     theta, _ = load.cycle_samples(steps_per_cycle)
     r0, r1 = load.split_lam(theta[:-1])
-    G_gap, b_gap, G_cone, b_cone = _open_rows(system, r0, r1, np.asarray(open_set, bool))
-    nv = G_cone.shape[2]
+    rows = _open_rows(system, r0, r1, np.asarray(open_set, bool))
+    nv, ns = rows.n_vars, rows.n_slip
+    G, b = rows.G_cone, rows.b_cone
+    Gt, G1, G2 = G[0::3], G[1::3], G[2::3]
+    bt, b1, b2 = b[0::3], b[1::3], b[2::3]
     phi = 2 * np.pi * np.arange(facets) / facets
-    nrm = np.column_stack([np.cos(phi), np.sin(phi)])                  # (k, 2)
-    # n · (b_u − G_u y) ≤ c (b_t − G_t y)  ⇔  (c G_t − n · G_u) y ≤ c b_t − n · b_u
-    nG = np.einsum("ia,mav->miv", nrm, G_cone[:, 1:])
-    nb = b_cone[:, 1:] @ nrm.T                                         # (m, k)
     c = np.zeros(nv)
-    c[-1] = -1.0
+    c[ns] = -1.0
+    bounds = [(None, None)] * ns + [(0.0, lam_max)] + [(None, None)] * (nv - ns - 1)
     out = []
     for scale in (np.cos(np.pi / facets), 1.0):
-        A = (scale * G_cone[:, None, 0] - nG).reshape(-1, nv)
-        b = (scale * b_cone[:, None, 0] - nb).reshape(-1)
-        res = linprog(c, A_ub=np.vstack([A, G_gap]), b_ub=np.concatenate([b, b_gap]),
-                      bounds=[(None, None)] * (nv - 1) + [(0.0, lam_max)], method="highs")
+        # n · (b_u − G_u y) ≤ c (b_t − G_t y)  ⇔  (c G_t − n · G_u) y ≤ c b_t − n · b_u
+        A = sp.vstack([scale * Gt - np.cos(a) * G1 - np.sin(a) * G2 for a in phi]
+                      + [rows.G_gap], format="csr")
+        ub = np.concatenate([scale * bt - np.cos(a) * b1 - np.sin(a) * b2 for a in phi]
+                            + [rows.b_gap])
+        res = linprog(c, A_ub=A, b_ub=ub, A_eq=rows.A_tie, b_eq=np.zeros(rows.A_tie.shape[0]),
+                      bounds=bounds, method="highs")
         if res.status == 2:
             out.append(0.0)
         elif res.status != 0:
             raise SolverError(f"the polygonal shakedown program stopped: {res.message}")
         else:
-            out.append(float(res.x[-1]))
+            out.append(float(res.x[ns]))
     return out[0], out[1]
 
 
