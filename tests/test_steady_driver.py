@@ -131,7 +131,8 @@ def test_plain_cycling_strategy_on_the_exact_engine_is_simulate_without_steps():
         evo = assemble(lambda x0, rw: Evolution(system, x0, rw, F), system, vals[0], F, None,
                        None, initial_state)
         run = CycleState(system, evo, RunSettings(cycles=30, steps_per_cycle=40, tol=1e-12),
-                         CycleHistory(disp, False, [evo.x.copy()]), vals[0], F)
+                         CycleHistory.of_run(system, vals, disp, 1e-12, evo.x, False),
+                         vals[0], F)
         run_cycles(run, theta, vals, strategy)
         np.testing.assert_array_equal(np.array(run.starts), ref.cycle_start_states)
         assert run.residual == ref.residual
@@ -221,7 +222,8 @@ def test_back_off_starts_again_after_a_step_and_holds_after_a_refusal():
 def test_slow_mode_steps_alone_reach_plain_cyclings_dissipation_on_the_41_node_block():
     """The slow-mode strategy without the follower (its tries used up): on the 41-node
     FE block D lands within 1e-6 of plain cycling to 1e-14 (3.1769966252792746e-07 J,
-    test_discrete_steady_jump.py), in far fewer than plain cycling's 273 cycles."""
+    test_discrete_steady_jump.py), in fewer than half of plain cycling's 450 cycles at
+    this tolerance (the residual measured against the service cycle)."""
     from conftest import slid_block
 
     system, load, protocol = slid_block(20)
@@ -229,14 +231,14 @@ def test_slow_mode_steps_alone_reach_plain_cyclings_dissipation_on_the_41_node_b
     evo = assemble(lambda x0, rw: Evolution(system, x0, rw, F), system, vals[0], F, None,
                    protocol, initial_state)
     run = CycleState(system, evo, RunSettings(cycles=200, steps_per_cycle=50, tol=1e-11),
-                     CycleHistory(disp, False, [evo.x.copy()]), vals[0], F)
+                     CycleHistory.of_run(system, vals, disp, 1e-11, evo.x, False), vals[0], F)
     steps = PieceSteps(True, True)
     steps.follower.left = 0
     run_cycles(run, theta, vals, steps)
     assert run.state == "steady" and run.residual <= 1e-11
     assert steps.stats["slow_mode_steps"] >= 1
     assert steps.stats["slow_mode_steps"] == steps.stats["periodic_steps"]   # no follower
-    assert len(run.starts) - 1 < 100
+    assert len(run.starts) - 1 < 225
     D = float(run.totals.dissipation.sum())
     assert D == pytest.approx(3.1769966252792746e-07, rel=1e-6, abs=0)
 

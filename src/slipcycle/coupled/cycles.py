@@ -15,8 +15,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from slipcycle.loading.nodal import force_scale
+from slipcycle.loading.service import service_displacement_scale
 
-__all__ = ["run_scales", "assemble", "CycleHistory", "ratchet_residual"]
+__all__ = ["run_scales", "assemble", "CycleHistory", "ResidualScale", "ratchet_residual",
+           "ROUNDOFF"]
+
+#: round-offs (units of the machine epsilon) of a term that a cycle-to-cycle change of a
+#: state component must exceed to be told from the round-off of the state (the updates of
+#: one cycle accumulate a few hundred at most)
+ROUNDOFF = 1e3
 
 
 def run_scales(system, load, steps_per_cycle: int, protocol: np.ndarray | None):
@@ -31,7 +38,9 @@ def run_scales(system, load, steps_per_cycle: int, protocol: np.ndarray | None):
     F : float
         Force scale of the loads and the assembly protocol [N].
     disp_scale : float
-        F / max diag K [m].
+        F / max diag K [m] (the whole load's: the tolerances of forces and of the
+        admissibility of a state; the steady-state residual follows the service cycle,
+        :class:`ResidualScale`).
     """
     theta, vals = load.cycle_samples(steps_per_cycle)
     F = force_scale(vals if protocol is None else np.vstack([vals, protocol]))
@@ -74,6 +83,91 @@ def assemble(evolution: Callable, system, r0: np.ndarray, F: float,
     return evo
 
 
+@dataclass(frozen=True, eq=False)
+class ResidualScale:
+    """The scale of the steady-state residual: the service cycle's displacement, floored
+    by the round-off of the state.
+
+    The change x_c − x_{c−1} of the start of a cycle is measured against u_s, the elastic
+    displacement of the service load's variation over the cycle
+    (:func:`~slipcycle.loading.service.service_displacement_scale`, at least 1e-12 × the
+    whole load's displacement scale, so that a constant load has one), not against the
+    whole load: a preload 1e7 times the service load would otherwise pass the transient
+    of the first cycles as steady. A component changes by round-off alone at the level of
+    the terms that set it: its own value and, through r = r^w + K x, the terms of its
+    node's equilibrium, ``ROUNDOFF`` ε (|x_i| + (s_i + f s_n)/K_ii) with
+    s = max_θ |r^w| + |K| |x| (s_n the node's normal row, f its friction coefficient,
+    for the slip condition |q| = f p), plus the engine's force tolerance ``noise`` turned
+    into a displacement by the node's stiffness. Only components that changed count: a
+    clamped node keeps its state bit for bit, however large its load. The residual's
+    scale is max(u_s, δ / tol) with δ the largest such floor, so that tol × scale is
+    never below the round-off of the components that moved.
+
+    Attributes
+    ----------
+    service : float
+        u_s [m].
+    K : (M, M) array
+        Reduced stiffness [N/m].
+    load : (M,) array
+        max over the cycle's samples of |r^w| [N].
+    normal : (M,) int array
+        The normal row of each component's node.
+    friction : (M,) array
+        f of the node of each tangential component, 0 for the normal ones.
+    noise : float
+        Force tolerance of the evolution engine's solves [N] (0 for the exact 2-D one).
+    """
+
+    service: float
+    K: np.ndarray
+    load: np.ndarray
+    normal: np.ndarray
+    friction: np.ndarray
+    noise: float = 0.0
+
+    @classmethod
+    def of(cls, system, samples: np.ndarray, disp_scale: float,
+           noise: float = 0.0) -> ResidualScale:
+        """The residual scale of ``system`` (2-D or 3-D) under the load ``samples``
+        ((S, M) [N], the first at θ = 0); ``disp_scale`` the whole load's [m]."""
+        n, m = system.n_nodes, system.K.shape[0]
+        t = m // n - 1                       # tangential components per node
+        node = np.concatenate([np.arange(t * n) // t, np.arange(n)])
+        f = np.concatenate([np.asarray(system.friction, float)[node[:t * n]], np.zeros(n)])
+        u = service_displacement_scale(samples, system.stiffness_scale())
+        return cls(max(u, 1e-12 * disp_scale), system.K,
+                   np.max(np.abs(np.asarray(samples, float)), axis=0), t * n + node, f,
+                   float(noise))
+
+    def roundoff(self, xa: np.ndarray, xb: np.ndarray) -> float:
+        """Largest round-off [m] of the components that differ between two states."""
+        moved = np.flatnonzero(xa != xb)
+        if moved.size == 0:
+            return 0.0
+        x = np.maximum(np.abs(xa), np.abs(xb))
+        rows = np.unique(np.concatenate([moved, self.normal[moved]]))
+        s = np.zeros(x.size)
+        s[rows] = self.load[rows] + np.abs(self.K[rows]) @ x
+        kii = np.diag(self.K)[moved]
+        f = self.friction[moved]
+        terms = x[moved] + (s[moved] + f * s[self.normal[moved]]) / kii
+        delta = ROUNDOFF * np.finfo(float).eps * terms + (1.0 + f) * self.noise / kii
+        return float(np.max(delta))
+
+    def step_scale(self, x: np.ndarray, step_tol: float) -> float:
+        """Displacement scale [m] of a step control over the service cycles from the
+        state x: max(u_s, ``ROUNDOFF`` ε max |x| / step_tol), so that step_tol × scale
+        stays above the round-off of the state (the whole state's: which components
+        will move is not known before the steps)."""
+        big = ROUNDOFF * np.finfo(float).eps * float(np.max(np.abs(x), initial=0.0))
+        return max(self.service, big / step_tol)
+
+    def scale(self, xa: np.ndarray, xb: np.ndarray, tol: float) -> float:
+        """max(u_s, δ / tol) [m], δ the :meth:`roundoff` of the change from xa to xb."""
+        return max(self.service, self.roundoff(xa, xb) / max(tol, np.finfo(float).tiny))
+
+
 @dataclass
 class CycleHistory:
     """The start-of-cycle states of a run, with what each cycle run leaves.
@@ -81,7 +175,7 @@ class CycleHistory:
     Attributes
     ----------
     disp_scale : float
-        Displacement scale [m] (the floor of the residual's scale).
+        Displacement scale [m]: the residual's scale where no ``scale`` is given.
     record : bool
         Keep the sample histories of every cycle.
     starts : list of (M,) arrays
@@ -90,6 +184,10 @@ class CycleHistory:
         Total dissipation of each cycle [J].
     samples : tuple of lists
         States, reactions and node modes at the samples of each cycle (if recorded).
+    scale : ResidualScale or None
+        The service cycle's residual scale with its round-off floor.
+    tol : float
+        Steady-state tolerance [1] (the round-off floor is δ / tol).
     """
 
     disp_scale: float
@@ -97,6 +195,17 @@ class CycleHistory:
     starts: list = field(default_factory=list)
     dissipation: list = field(default_factory=list)
     samples: tuple = field(default_factory=lambda: ([], [], []))
+    scale: ResidualScale | None = None
+    tol: float = 1e-8
+
+    @classmethod
+    def of_run(cls, system, samples: np.ndarray, disp_scale: float, tol: float,
+               x0: np.ndarray, record: bool) -> CycleHistory:
+        """The history of a steady-state run from the start x0 [m] under the load
+        ``samples`` ((S, M) [N]), its residual measured against the service cycle
+        (:class:`ResidualScale`) at the tolerance ``tol``."""
+        return cls(disp_scale, record, [np.array(x0, float)],
+                   scale=ResidualScale.of(system, samples, disp_scale), tol=tol)
 
     def add(self, x: np.ndarray, totals) -> None:
         """Append the cycle just run (its end state x, its ``totals``)."""
@@ -112,10 +221,16 @@ class CycleHistory:
             lst.pop()
 
     def increment(self):
-        """The last increment d = x_c − x_{c−1} [m], its scale max(disp_scale, max |x|)
-        over the last two starts [m], and the residual max |d| / scale [1]."""
-        xscale = max(self.disp_scale, float(np.max(np.abs(np.array(self.starts[-2:])))))
-        d1 = self.starts[-1] - self.starts[-2]
+        """The last increment d = x_c − x_{c−1} [m], its scale [m] and the residual
+        max |d| / scale [1]. The scale is that of the service cycle with the round-off
+        floor of the components that changed (:meth:`ResidualScale.scale`); without a
+        ``scale``, max(disp_scale, max |x|) over the last two starts."""
+        xa, xb = self.starts[-2], self.starts[-1]
+        if self.scale is not None:
+            xscale = self.scale.scale(xa, xb, self.tol)
+        else:
+            xscale = max(self.disp_scale, float(np.max(np.abs(np.array(self.starts[-2:])))))
+        d1 = xb - xa
         return d1, xscale, float(np.max(np.abs(d1))) / xscale
 
     def records(self) -> tuple | None:

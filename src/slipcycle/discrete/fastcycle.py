@@ -26,11 +26,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from slipcycle.coupled.cycles import ROUNDOFF, ResidualScale
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
 from slipcycle.loading.service import service_slip_tolerance, slips_in_cycle
 
 __all__ = ["steady_state_fast", "steady_states_batch", "FAST_CODES"]
+
+EPS = float(np.finfo(float).eps)
 
 #: kernel return codes
 STEADY, RATCHET, NOT_CONVERGED, SEPARATION, PIVOT_FAIL, INADMISSIBLE = 0, 1, 2, -1, -2, -3
@@ -80,7 +83,29 @@ def _murty(M, a, alpha, eps):
 
 
 @njit(cache=True)
-def _kernel(A, B, f, theta, qw, pw, v0, cycles, tol, min_cycles, force_tol, disp_scale):
+def _residual_scale(A, B, f, qabs, pabs, va, vb, service, tol):
+    """:meth:`~slipcycle.coupled.cycles.ResidualScale.scale` of the change va → vb of the
+    slips of a run in contact (w = 0): max(u_s, δ / tol), δ the largest round-off
+    ROUNDOFF ε (|v_j| + (s_q + f_j s_p) / A_jj) of the nodes whose slip changed, s_q and
+    s_p the magnitudes of the terms of q_j and p_j [m]."""
+    n = va.size
+    delta = 0.0
+    for j in range(n):
+        if va[j] == vb[j]:
+            continue
+        sq, sp = qabs[j], pabs[j]
+        for k in range(n):
+            vk = max(np.abs(va[k]), np.abs(vb[k]))
+            sq += np.abs(A[j, k]) * vk
+            sp += np.abs(B[j, k]) * vk
+        vj = max(np.abs(va[j]), np.abs(vb[j]))
+        delta = max(delta, ROUNDOFF * EPS * (vj + (sq + f[j] * sp) / A[j, j]))
+    return max(service, delta / max(tol, 1e-300))
+
+
+@njit(cache=True)
+def _kernel(A, B, f, theta, qw, pw, v0, cycles, tol, min_cycles, force_tol, disp_scale,
+            service, qabs, pabs):
     n = v0.size
     nseg = theta.size - 1
     v = v0.copy()
@@ -208,9 +233,7 @@ def _kernel(A, B, f, theta, qw, pw, v0, cycles, tol, min_cycles, force_tol, disp
         for j in range(n):
             total += diss[j]
         hist[c] = total
-        xs = disp_scale
-        for j in range(n):
-            xs = max(xs, np.abs(starts[c, j]), np.abs(starts[c + 1, j]))
+        xs = _residual_scale(A, B, f, qabs, pabs, starts[c], starts[c + 1], service, tol)
         d1 = starts[c + 1] - starts[c]
         residual = np.max(np.abs(d1)) / xs
         if c + 1 < min_cycles:
@@ -264,7 +287,8 @@ def steady_state_fast(system: FrictionalSystem, load: DiscreteLoad, initial_slip
         np.ascontiguousarray(system.A), np.ascontiguousarray(system.B),
         np.ascontiguousarray(system.friction, dtype=float), theta,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), v0,
-        int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale)
+        int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale,
+        *_scale_args(system, vals, disp_scale))
     slipping = slips_in_cycle(
         slen, np.abs(ratchet),
         service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale),
@@ -280,8 +304,17 @@ def steady_state_fast(system: FrictionalSystem, load: DiscreteLoad, initial_slip
             "slipping": slipping, "dissipation_history": hist}
 
 
+def _scale_args(system: FrictionalSystem, vals: np.ndarray, disp_scale: float) -> tuple:
+    """The kernel's arguments of the residual scale (:class:`ResidualScale`): u_s and the
+    largest |q^w|, |p^w| of each node over the cycle."""
+    scale = ResidualScale.of(system, vals, disp_scale)
+    n = system.n_nodes
+    return scale.service, scale.load[:n].copy(), scale.load[n:].copy()
+
+
 @njit(cache=True, parallel=True)
-def _batch(A, B, f, theta, qw, pw, V0, cycles, tol, min_cycles, force_tol, disp_scale):
+def _batch(A, B, f, theta, qw, pw, V0, cycles, tol, min_cycles, force_tol, disp_scale,
+           service, qabs, pabs):
     m, n = V0.shape
     codes = np.zeros(m, np.int64)
     ncyc = np.zeros(m, np.int64)
@@ -293,7 +326,8 @@ def _batch(A, B, f, theta, qw, pw, V0, cycles, tol, min_cycles, force_tol, disp_
     drift = np.zeros((m, n))
     for i in prange(m):
         c, k, r, d, s, e, v, dr, _ = _kernel(A, B, f, theta, qw, pw, V0[i].copy(), cycles, tol,
-                                            min_cycles, force_tol, disp_scale)
+                                            min_cycles, force_tol, disp_scale, service,
+                                            qabs, pabs)
         codes[i] = c
         ncyc[i] = k
         resid[i] = r
@@ -333,7 +367,8 @@ def steady_states_batch(system: FrictionalSystem, load: DiscreteLoad, V0, *,
         np.ascontiguousarray(system.A), np.ascontiguousarray(system.B),
         np.ascontiguousarray(system.friction, dtype=float), theta,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), V0,
-        int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale)
+        int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale,
+        *_scale_args(system, vals, disp_scale))
     slip_tol = service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale)
     slipping = slips_in_cycle(slen, np.abs(drift), slip_tol, codes == RATCHET)
     states = np.array([FAST_CODES[int(c)] for c in codes], dtype=object)
