@@ -29,7 +29,11 @@ from numba import njit, prange
 from slipcycle.coupled.cycles import ROUNDOFF, ResidualScale
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
-from slipcycle.loading.service import service_slip_tolerance, slips_in_cycle
+from slipcycle.loading.service import (
+    service_force_scale,
+    service_slip_tolerance,
+    slips_in_cycle,
+)
 
 __all__ = ["steady_state_fast", "steady_states_batch", "FAST_CODES"]
 
@@ -287,7 +291,7 @@ def steady_state_fast(system: FrictionalSystem, load: DiscreteLoad, initial_slip
         np.ascontiguousarray(system.A), np.ascontiguousarray(system.B),
         np.ascontiguousarray(system.friction, dtype=float), theta,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), v0,
-        int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale,
+        int(cycles), float(tol), int(min_cycles), 1e-10 * service_force_scale(vals, F), disp_scale,
         *_scale_args(system, vals, disp_scale))
     slipping = slips_in_cycle(
         slen, np.abs(ratchet),
@@ -367,7 +371,7 @@ def steady_states_batch(system: FrictionalSystem, load: DiscreteLoad, V0, *,
         np.ascontiguousarray(system.A), np.ascontiguousarray(system.B),
         np.ascontiguousarray(system.friction, dtype=float), theta,
         np.ascontiguousarray(vals[:, :n]), np.ascontiguousarray(vals[:, n:]), V0,
-        int(cycles), float(tol), int(min_cycles), 1e-10 * F, disp_scale,
+        int(cycles), float(tol), int(min_cycles), 1e-10 * service_force_scale(vals, F), disp_scale,
         *_scale_args(system, vals, disp_scale))
     slip_tol = service_slip_tolerance(tol, vals, system.stiffness_scale(), disp_scale)
     slipping = slips_in_cycle(slen, np.abs(drift), slip_tol, codes == RATCHET)

@@ -7,7 +7,7 @@ is reached. A state that creeps geometrically, by ρ of its last increment per c
 still ρ/(1 − ρ) increments from its limit: that distance must be within the tolerance
 too (plain cycling of an FE-reduced block of 41 contact nodes creeping at ρ = 0.95 at
 tolerance 1e-8: the increment test alone stops with D 4.9e-6 off its limit, the
-distance 9.0e-7). Both are measured against the service cycle's displacement, with a
+distance 3.7e-7). Both are measured against the service cycle's displacement, with a
 round-off floor (:class:`~slipcycle.coupled.cycles.ResidualScale`), not the whole
 load's: a preload would pass the transient of the first cycles as steady. The steady
 cycle is classified as
@@ -64,6 +64,7 @@ from slipcycle.discrete.periodic import (
 )
 from slipcycle.errors import InadmissibleInitialState
 from slipcycle.kernels.creep import creep_distance
+from slipcycle.loading.service import service_force_scale
 from slipcycle.result import STEADY_STATES
 
 __all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
@@ -442,7 +443,7 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     settings = RunSettings(cycles=cycles, steps_per_cycle=steps_per_cycle, tol=tol,
                            min_cycles=min_cycles)
     theta, vals, F, disp_scale = run_scales(system, load, steps_per_cycle, protocol)
-    evo = _assembled(system, vals[0], F, initial_slip, protocol)
+    evo = _assembled(system, vals[0], F, initial_slip, protocol, service_force_scale(vals, F))
     x_init = evo.x.copy()
     history = CycleHistory.of_run(system, vals, disp_scale, tol, evo.x, record)
     run = CycleState(system, evo, settings, history, vals[0], F)
@@ -715,10 +716,17 @@ class SlowModes:
 
 
 def _assembled(system: FrictionalSystem, r0: np.ndarray, F: float,
-               initial_slip: np.ndarray | None, protocol: np.ndarray | None) -> Evolution:
-    """The evolution at θ = 0 (:func:`~slipcycle.coupled.cycles.assemble`)."""
-    return assemble(lambda x0, rw: Evolution(system, x0, rw, F), system, r0, F, initial_slip,
-                    protocol, initial_state)
+               initial_slip: np.ndarray | None, protocol: np.ndarray | None,
+               F_cycles: float | None = None) -> Evolution:
+    """The evolution at θ = 0 (:func:`~slipcycle.coupled.cycles.assemble`), assembled
+    with tolerances relative to the whole load F [N]; the cycles' evolution from there
+    with tolerances relative to ``F_cycles`` [N] (default F): the service cycle's
+    (:func:`~slipcycle.loading.service.service_force_scale`)."""
+    evo = assemble(lambda x0, rw: Evolution(system, x0, rw, F), system, r0, F, initial_slip,
+                   protocol, initial_state)
+    if F_cycles is None or F_cycles == F:
+        return evo
+    return Evolution(system, evo.x, r0, F_cycles)
 
 
 def _steady_result(system, evo, state, residual, ratchet, totals, starts, events, diss_hist,

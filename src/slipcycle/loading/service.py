@@ -19,8 +19,32 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["service_displacement_scale", "cycle_slip_tolerance", "service_slip_tolerance",
-           "slips_in_cycle"]
+__all__ = ["service_force_scale", "service_displacement_scale", "cycle_slip_tolerance",
+           "service_slip_tolerance", "slips_in_cycle"]
+
+
+def service_force_scale(samples: np.ndarray, whole: float) -> float:
+    """Force scale of the service cycle [N]: max_s |r^w(θ_s) − r^w(θ_0)|_∞, the variation
+    of the load over the cycle, or ``whole`` (the whole load's scale) for a constant load.
+
+    The tolerances that decide, during the cycles, when a node reaches its friction limit
+    follow it: relative to the whole load (a preload 1e7 times the service load) they
+    would let a node slip a whole-load tolerance early at every reversal.
+
+    Parameters
+    ----------
+    samples : (S, M) array
+        Load samples r^w(θ_s) of one cycle [N] (the first at θ = 0).
+    whole : float
+        Force scale of the whole load [N].
+
+    Returns
+    -------
+    float
+    """
+    samples = np.asarray(samples, float)
+    variation = float(np.max(np.abs(samples - samples[0]), initial=0.0))
+    return variation if variation > 0.0 else float(whole)
 
 
 def service_displacement_scale(samples: np.ndarray, stiffness_scale: float) -> float:
@@ -40,9 +64,7 @@ def service_displacement_scale(samples: np.ndarray, stiffness_scale: float) -> f
         load over the cycle gives a node held only by its own stiffness; 0 for a constant
         load.
     """
-    samples = np.asarray(samples, float)
-    variation = float(np.max(np.abs(samples - samples[0]), initial=0.0))
-    return variation / float(stiffness_scale)
+    return service_force_scale(samples, 0.0) / float(stiffness_scale)
 
 
 def cycle_slip_tolerance(tol: float, service_scale: float, disp_scale: float) -> float:
