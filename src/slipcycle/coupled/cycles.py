@@ -18,12 +18,15 @@ from slipcycle.loading.nodal import force_scale
 from slipcycle.loading.service import service_displacement_scale
 
 __all__ = ["run_scales", "assemble", "CycleHistory", "ResidualScale", "ratchet_residual",
-           "ROUNDOFF"]
+           "ROUNDOFF", "STEP_ROUNDOFF"]
 
 #: round-offs (units of the machine epsilon) of a term that a cycle-to-cycle change of a
 #: state component must exceed to be told from the round-off of the state (the updates of
 #: one cycle accumulate a few hundred at most)
 ROUNDOFF = 1e3
+#: round-offs of the state by which the full step and the two half steps of a step-doubling
+#: control can differ with no discretisation error (:meth:`ResidualScale.step_scale`)
+STEP_ROUNDOFF = 4.0
 
 
 def run_scales(system, load, steps_per_cycle: int, protocol: np.ndarray | None):
@@ -156,11 +159,13 @@ class ResidualScale:
         return float(np.max(delta))
 
     def step_scale(self, x: np.ndarray, step_tol: float) -> float:
-        """Displacement scale [m] of a step control over the service cycles from the
-        state x: max(u_s, ``ROUNDOFF`` ε max |x| / step_tol), so that step_tol × scale
-        stays above the round-off of the state (the whole state's: which components
-        will move is not known before the steps)."""
-        big = ROUNDOFF * np.finfo(float).eps * float(np.max(np.abs(x), initial=0.0))
+        """Displacement scale [m] of a step-doubling control over the service cycles
+        from the state x: max(u_s, ``STEP_ROUNDOFF`` ε max |x| / step_tol), so that
+        step_tol × scale stays above the round-off of the difference of the full step
+        and the two half steps (x0 + Δ rounded once and twice: at most 3 ε |x| apart with
+        no error at all), or every step would be halved to the deepest level. The whole
+        state's max |x|: which components will move is not known before the steps."""
+        big = STEP_ROUNDOFF * np.finfo(float).eps * float(np.max(np.abs(x), initial=0.0))
         return max(self.service, big / step_tol)
 
     def scale(self, xa: np.ndarray, xb: np.ndarray, tol: float) -> float:
