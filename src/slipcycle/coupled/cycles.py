@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from slipcycle.loading.nodal import force_scale
-from slipcycle.loading.service import service_displacement_scale
+from slipcycle.loading.service import service_force_scale
 
 __all__ = ["run_scales", "assemble", "CycleHistory", "ResidualScale", "ratchet_residual",
            "ROUNDOFF", "STEP_ROUNDOFF"]
@@ -93,10 +93,10 @@ class ResidualScale:
 
     The change x_c − x_{c−1} of the start of a cycle is measured against u_s, the elastic
     displacement of the service load's variation over the cycle
-    (:func:`~slipcycle.loading.service.service_displacement_scale`, at least 1e-12 × the
-    whole load's displacement scale, so that a constant load has one), not against the
-    whole load: a preload 1e7 times the service load would otherwise pass the transient
-    of the first cycles as steady. A component changes by round-off alone at the level of
+    (:func:`~slipcycle.loading.service.service_force_scale` / max diag K: at most the
+    whole load's displacement scale, which a constant load keeps), not against the whole
+    load: a preload 1e7 times the service load would otherwise pass the transient of the
+    first cycles as steady. A component changes by round-off alone at the level of
     the terms that set it: its own value and, through r = r^w + K x, the terms of its
     node's equilibrium, ``ROUNDOFF`` ε (|x_i| + (s_i + f s_n)/K_ii) with
     s = max_θ |r^w| + |K| |x| (s_n the node's normal row, f its friction coefficient,
@@ -138,8 +138,9 @@ class ResidualScale:
         t = m // n - 1                       # tangential components per node
         node = np.concatenate([np.arange(t * n) // t, np.arange(n)])
         f = np.concatenate([np.asarray(system.friction, float)[node[:t * n]], np.zeros(n)])
-        u = service_displacement_scale(samples, system.stiffness_scale())
-        return cls(max(u, 1e-12 * disp_scale), system.K,
+        k = system.stiffness_scale()
+        u = service_force_scale(samples, disp_scale * k) / k
+        return cls(u, system.K,
                    np.max(np.abs(np.asarray(samples, float)), axis=0), t * n + node, f,
                    float(noise))
 

@@ -25,11 +25,14 @@ __all__ = ["service_force_scale", "service_displacement_scale", "cycle_slip_tole
 
 def service_force_scale(samples: np.ndarray, whole: float) -> float:
     """Force scale of the service cycle [N]: max_s |r^w(θ_s) − r^w(θ_0)|_∞, the variation
-    of the load over the cycle, or ``whole`` (the whole load's scale) for a constant load.
+    of the load over the cycle, at most ``whole`` (the whole load's scale: a load that
+    swings about zero varies by twice its amplitude), and ``whole`` for a constant load.
 
-    The tolerances that decide, during the cycles, when a node reaches its friction limit
-    follow it: relative to the whole load (a preload 1e7 times the service load) they
-    would let a node slip a whole-load tolerance early at every reversal.
+    The tolerances of the cycles follow it (the friction limits' and the step control's,
+    and the steady-state residual, :class:`~slipcycle.coupled.cycles.ResidualScale`):
+    relative to the whole load (a preload 1e7 times the service load) they would let a
+    node slip a whole-load tolerance early at every reversal and pass the transient of
+    the first cycles as steady; capped by it, they are never coarser than before.
 
     Parameters
     ----------
@@ -42,9 +45,14 @@ def service_force_scale(samples: np.ndarray, whole: float) -> float:
     -------
     float
     """
+    variation = _variation(samples)
+    return min(variation, float(whole)) if variation > 0.0 else float(whole)
+
+
+def _variation(samples: np.ndarray) -> float:
+    """max_s |r^w(θ_s) − r^w(θ_0)|_∞ [N]."""
     samples = np.asarray(samples, float)
-    variation = float(np.max(np.abs(samples - samples[0]), initial=0.0))
-    return variation if variation > 0.0 else float(whole)
+    return float(np.max(np.abs(samples - samples[0]), initial=0.0))
 
 
 def service_displacement_scale(samples: np.ndarray, stiffness_scale: float) -> float:
@@ -64,7 +72,7 @@ def service_displacement_scale(samples: np.ndarray, stiffness_scale: float) -> f
         load over the cycle gives a node held only by its own stiffness; 0 for a constant
         load.
     """
-    return service_force_scale(samples, 0.0) / float(stiffness_scale)
+    return _variation(samples) / float(stiffness_scale)
 
 
 def cycle_slip_tolerance(tol: float, service_scale: float, disp_scale: float) -> float:
