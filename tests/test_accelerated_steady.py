@@ -229,9 +229,9 @@ def test_fe_block_401_default_path_at_the_default_tolerance_lands_within_1e6_of_
     """401 contact nodes on the default path (slow-mode steps, N ≥ SLOW_MIN_NODES) at the
     default tolerance 1e-8: the steps go on until their remaining distance is below 1e-11
     (SLOW_SETTLED), so D and the state (the 378 stuck nodes' memory) land within 1e-6 of
-    plain cycling's limit after 2200 cycles (measured 7.9e-7 and 6.0e-7, in 124 cycles;
-    stopping the steps at the tolerance gives 100 cycles and D 1.0e-4 off), certified by
-    a plain cycle."""
+    plain cycling's limit after 2200 cycles (measured 1.8e-7 and 6.0e-7, in 134 cycles;
+    stopping the steps at the tolerance gives 114 cycles and D 9.0e-7 off: 1.0e-4 when
+    the residual was measured against the whole load), certified by a plain cycle."""
     from test_discrete_slow_modes import DATA, PLAIN_D_401
 
     from slipcycle.discrete import steady
@@ -246,12 +246,13 @@ def test_fe_block_401_default_path_at_the_default_tolerance_lands_within_1e6_of_
     x, plain_x = fast.cycle_start_states[-1], np.load(DATA / "fe_block_401_plain_limit.npy")
     assert np.abs(x - plain_x).max() <= 1e-6 * np.abs(plain_x).max()
     assert fast.dissipation_per_cycle == pytest.approx(PLAIN_D_401, rel=1e-6, abs=0)
-    # stopped at the tolerance instead, the steps leave D far off (the reason for the
+    # stopped at the tolerance instead, the steps leave D further off (the reason for the
     # tighter stop)
     monkeypatch.setattr(steady, "SLOW_SETTLED", 1.0)
     loose = simulate(system, load, **kw)
     assert loose.cycles_run < fast.cycles_run
-    assert abs(loose.dissipation_per_cycle - PLAIN_D_401) > 1e-5 * PLAIN_D_401
+    assert abs(loose.dissipation_per_cycle - PLAIN_D_401) > \
+        3 * abs(fast.dissipation_per_cycle - PLAIN_D_401)
 
 
 @pytest.mark.parametrize("seed", [1, 3])
@@ -267,14 +268,118 @@ def test_3d_accelerated_runs_report_their_jumps_and_are_certified(seed):
 
     system, load = _random_coupled(seed, 8)
     kw = dict(cycles=200, steps_per_cycle=40, step_tol=1e-6, tol=1e-9, record=False)
-    acc = simulate3d(system, load, **kw)
+    acc = simulate3d(system, load, accelerate=True, **kw)
     assert acc.jumps >= 1 and acc.certificate.acceleration == "anderson"
     assert acc.certificate.certified_residual == acc.residual <= 1e-9
     plain = simulate3d(system, load, accelerate=False, **kw)
     assert plain.certificate.acceleration == "none"
     summary = solve_model(system, load, {"cycles": 200, "steps_per_cycle": 40,
-                                         "step_tol": 1e-6, "tol": 1e-9},
-                          fields=()).summary()
+                                         "step_tol": 1e-6, "tol": 1e-9,
+                                         "accelerate": True}, fields=()).summary()
     assert summary["acceleration"] == "anderson"
     assert summary["certified_residual"] == pytest.approx(acc.residual, rel=1e-12)
     assert summary["units"]["memory_distance"] == "1"
+    # the default of the 3-D model is plain cycling (None, and the case file's default)
+    default = solve_model(system, load, {"cycles": 200, "steps_per_cycle": 40,
+                                         "step_tol": 1e-6, "tol": 1e-9}, fields=())
+    assert default.summary()["acceleration"] == "none"
+    assert default.solution.solver_stats.jumps == 0
+    np.testing.assert_array_equal(default.solution.cycle_start_states,
+                                  plain.cycle_start_states)
+
+
+# --- 3-D: plain cycling by default, Anderson mixing opt-in with a measured bound ---------
+
+def _plain_pair_3d(system, load, *, tol=1e-8, **kw):
+    """The 3-D default path at ``tol`` and plain cycling to 1e-11, on the same map."""
+    from slipcycle.discrete3d import simulate3d
+
+    kw = dict(record=False, **kw)
+    return (simulate3d(system, load, tol=tol, **kw),
+            simulate3d(system, load, tol=1e-11, accelerate=False, **kw))
+
+
+def test_3d_default_path_on_a_100_node_chain_lands_within_1e6_of_plain_cyclings_limit():
+    """The FE-like chain of 100 nodes (10 slip, 90 keep their memory), replayed step
+    subdivision: the default path (plain cycling, its creep included in the steady-state
+    test) at the default tolerance 1e-8 ends within 1e-6 of plain cycling run to 1e-11
+    (measured 5.3e-11 in D, 6.0e-9 of the slip scale; 50 cycles against 73), certified
+    as plain, its creep estimate above the measured distance."""
+    from test_discrete3d_steady_jump import _fe_like
+
+    system, load = _fe_like(100)
+    fast, plain = _plain_pair_3d(system, load, steps_per_cycle=40, step_tol=1e-6,
+                                 cycles=400, replay=True)
+    assert plain.residual <= 1e-11
+    cert = fast.certificate
+    assert cert.acceleration == "none" and fast.jumps == 0
+    _same(fast, plain)
+    x, x_p = fast.cycle_start_states[-1], plain.cycle_start_states[-1]
+    slip_scale = max(plain.disp_scale, float(np.abs(x_p).max()))
+    assert np.abs(x - x_p).max() / slip_scale <= cert.memory_distance
+
+
+@settings(max_examples=8, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(seed=st.integers(0, 100_000), n=st.integers(6, 10))
+def test_3d_random_systems_default_path_matches_plain_cycling_to_1e11(seed, n):
+    """Random coupled 3-D systems (random positive definite stiffness, steady pressure,
+    a shear rotating over the cycle, large at some nodes only): the default path at 1e-8
+    against plain cycling to 1e-11, on the replayed step subdivision: class, node sets,
+    D and state within 1e-6."""
+    from test_discrete3d_steady_jump import _random_coupled
+
+    system, load = _random_coupled(seed, n)
+    fast, plain = _plain_pair_3d(system, load, steps_per_cycle=40, step_tol=1e-6,
+                                 cycles=600, replay=True)
+    # systems that creep (several cycles), not those that stick from the first cycle on
+    assume(plain.steady_state in ("shakedown", "cyclic_slip") and plain.residual <= 1e-11
+           and plain.cycles_run >= 4)
+    assert fast.certificate.acceleration == "none"
+    _same(fast, plain)
+
+
+def test_3d_two_basins_each_assembly_keeps_its_own_steady_state():
+    """A coupled 2-node system whose assembly decides the steady state: tightened plainly
+    it shakes down, after a fit-up it slips cyclically. On the default path each start
+    ends in the steady state of its own plain cycling to 1e-11."""
+    from test_discrete3d_protocol_steps import _A2, _B2, _FIT_UP2, _LOAD2, _PLAIN
+
+    from slipcycle.discrete3d.case import assembly_states
+    from slipcycle.discrete3d.model import embed_2d
+
+    system = embed_2d(_A2, _B2, np.eye(2), 0.5)
+    ends = []
+    for steps in (_PLAIN, _FIT_UP2):
+        fast, plain = _plain_pair_3d(system, _LOAD2, steps_per_cycle=100, step_tol=1e-7,
+                                     cycles=400, replay=True,
+                                     protocol=assembly_states(steps, _LOAD2))
+        _same(fast, plain)
+        ends.append(fast.steady_state)
+    assert ends == ["shakedown", "cyclic_slip"]
+
+
+def test_3d_anderson_certificate_reports_the_measured_bound_not_its_creep():
+    """The opt-in Anderson mixing on the 50-node chain: the certificate's distances are
+    at least :data:`ANDERSON_DISTANCE` (the creep of its certifying cycles, about the
+    tolerance, cannot see a jump to another member of the set of steady states), and the
+    measured distance from plain cycling's limit (1e-11) lies within them."""
+    from test_discrete3d_steady_jump import _fe_like
+
+    from slipcycle.discrete3d import simulate3d
+    from slipcycle.discrete3d.steady import ANDERSON_DISTANCE
+
+    system, load = _fe_like(50)
+    kw = dict(steps_per_cycle=40, step_tol=1e-6, cycles=400, record=False, replay=True)
+    acc = simulate3d(system, load, accelerate=True, **kw)
+    plain = simulate3d(system, load, accelerate=False, tol=1e-11, **kw)
+    cert = acc.certificate
+    assert cert.acceleration == "anderson" and acc.jumps >= 1
+    assert cert.certified_residual <= 1e-8
+    assert cert.memory_distance >= ANDERSON_DISTANCE[0]
+    assert cert.dissipation_distance >= ANDERSON_DISTANCE[1]
+    x, x_p = acc.cycle_start_states[-1], plain.cycle_start_states[-1]
+    slip_scale = max(plain.disp_scale, float(np.abs(x_p).max()))
+    assert np.abs(x - x_p).max() / slip_scale <= cert.memory_distance
+    d_p = plain.dissipation_per_cycle
+    assert abs(acc.dissipation_per_cycle - d_p) / abs(d_p) <= cert.dissipation_distance

@@ -21,8 +21,13 @@ cycling continued from there: the rest of the geometric creep of the last two pl
 increments, ρ/(1 − ρ) times the last one (:func:`~slipcycle.kernels.creep.creep_distance`;
 plain cycling's own runs report the same estimate). Where the accelerator took the state
 to another member of the set of steady states (Barber 2012, §3: the stuck nodes' memory is
-set by the history) no cycle can tell; how far that is on the benchmark systems is
-measured by the tests and bounded in docs/discrete.md and docs/discrete3d.md.
+set by the history) no cycle can tell. An accelerator whose steps can do that says so
+with its :attr:`Accelerator.distance_bound`: the largest distances measured between its
+results and plain cycling's limit on the benchmark systems; the certificate of a state
+its steps shaped then reports at least that bound, never the (much smaller) creep of the
+certifying cycles (the 3-D Anderson mixing: docs/discrete3d.md). The 2-D steps follow
+plain cycling's own trajectory on the piecewise-affine cycle map; their distances are
+measured by the tests and bounded in docs/discrete.md.
 """
 
 from __future__ import annotations
@@ -154,6 +159,13 @@ class Accelerator:
     def method(self) -> str:
         """The word (:data:`ACCELERATIONS`) of the steps that shaped the current state."""
         return "none"
+
+    #: (memory, D): the largest distances of the state (relative to the slip scale) and
+    #: of D (relative) from plain cycling's limit measured on the benchmark systems for
+    #: the states this accelerator's steps shape, reported by their certificate instead of
+    #: the creep estimate where larger (:func:`certificate`); None: the steps follow plain
+    #: cycling's trajectory and the creep estimate applies
+    distance_bound: tuple[float, float] | None = None
 
     def certifying(self, run: CycleState) -> None:
         """The plain cycles of the certificate follow (:func:`certify`): record nothing
@@ -321,12 +333,16 @@ class Certificate:
         Estimated distance of the state (the stuck nodes' slips among it) from the limit
         of plain cycling continued from it, relative to the displacement scale [1]:
         ρ/(1 − ρ) times the last increment (ρ the ratio of the last two plain increments;
-        the last increment where they do not shrink).
+        the last increment where they do not shrink). For a state shaped by the steps of
+        an accelerator with a :attr:`Accelerator.distance_bound`, at least its first entry:
+        the distance from plain cycling's limit from the *start* is not estimated by any
+        cycle, only bounded by measurements on the benchmark systems.
     dissipation_distance : float
         Estimated distance of D from that limit [1]: the last change of D times max(1,
         ρ/(1 − ρ)), relative to |D| (to the energy scale F × displacement scale where D
         is 0); inf with fewer than three cycles run (the first cycle from an assembled
-        or imposed state says nothing about D's convergence).
+        or imposed state says nothing about D's convergence). At least the second entry
+        of the accelerator's :attr:`Accelerator.distance_bound`, as above.
     """
 
     acceleration: str
@@ -348,4 +364,8 @@ def certificate(run: CycleState, accelerator: Accelerator) -> Certificate:
     if len(dis) >= 3:
         scale = abs(dis[-1]) or run.F * run.xscale
         d_dist = abs(dis[-1] - dis[-2]) * factor / scale
+    bound = accelerator.distance_bound
+    if bound is not None and accelerator.method != "none":
+        # the steps may have moved the memory: what was measured, not the creep
+        near, d_dist = max(near, bound[0]), max(d_dist, bound[1])
     return Certificate(accelerator.method, float(res), float(near), float(d_dist))

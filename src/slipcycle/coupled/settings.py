@@ -42,8 +42,9 @@ class RunSettings(Mapping):
         3-D: freeze and replay the step control's subdivision (default False; None in 2-D).
     accelerate : bool or None
         The accelerated steady state with its certificate (``True``), plain cycling
-        (``False``), or (None, the default) the steady-state driver's rule of where the
-        accelerators pay (:mod:`slipcycle.coupled.driver`).
+        (``False``), or (None, the default) the model's rule: in 2-D the accelerators
+        where they pay (:func:`slipcycle.discrete.simulate`), in 3-D plain cycling (the
+        Anderson mixing is opt-in: :func:`slipcycle.discrete3d.simulate3d`).
 
     Raises
     ------
@@ -70,9 +71,10 @@ class RunSettings(Mapping):
         Raises
         ------
         TypeError
-            For a setting the model does not have (its default is None).
+            For a setting the model does not have (its default is None; ``accelerate``,
+            None by default, both models have).
         """
-        known = list(defaults)
+        known = list(defaults) + [k for k in _BOTH if k not in defaults]
         given = {}
         for key, value in dict(run or {}).items():
             key = SETTING_ALIASES.get(key, key)
@@ -95,6 +97,8 @@ class RunSettings(Mapping):
 
 
 _NAMES = tuple(f.name for f in fields(RunSettings))
+#: settings of both models whose default is None (the driver's rule)
+_BOTH = ("accelerate",)
 
 
 @dataclass(frozen=True)
