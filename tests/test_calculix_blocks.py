@@ -216,8 +216,11 @@ def _periodic(red, frac, normal="normal", tangential="tangential"):
                                 accept_ill_posed=True)
     load = Load3D.harmonic(pn, qn, scale * red.loads[tangential]["p"], scale * qt)
     # steady-state tolerance 1e-10: the dissipation is then settled well below the 1e-8
-    # compared (at the default 1e-8 a slow approach stops a cycle apart, 2e-8 off)
-    res = solve_model(system, load, {"cycles": 80, "steps_per_cycle": 16, "tol": 1e-10},
+    # compared (at the default 1e-8 a slow approach stops a cycle apart, 2e-8 off). The
+    # residual is measured against the service cycle's displacement: the C3D10 block,
+    # creeping by 0.96 per cycle, needs 369 cycles (80 sufficed against the whole load's
+    # scale, where it stopped with D 2.5e-5 off its limit)
+    res = solve_model(system, load, {"cycles": 400, "steps_per_cycle": 16, "tol": 1e-10},
                       fields=())
     return res.steady_state, res.dissipation_per_cycle
 

@@ -182,7 +182,7 @@ boundary = "top"
 displacement = [1, 0, 0]
 [fe.discrete]
 friction = 0.3
-cycles = 30
+cycles = 80
 steps_per_cycle = 24
 [fe.discrete.mean]
 normal = 1e-6

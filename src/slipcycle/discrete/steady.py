@@ -151,8 +151,8 @@ POLISH = 1e-3
 #: max(POLISH·tol, min(tol, this)) of the state's scale, tighter than the tolerance: D of
 #: an FE-reduced block is small against its elastic energy, so D to 1e-6 needs the state to
 #: about 1e-11, and a step skips the rest of a creep that plain cycling would take
-#: thousands of cycles for (401-node block at tol 1e-8: 124 cycles and D 7.9e-7 off plain
-#: cycling's limit, against 100 cycles and 1.0e-4 when the steps stop at the tolerance;
+#: thousands of cycles for (401-node block at tol 1e-8: 134 cycles and D 1.8e-7 off plain
+#: cycling's limit, against 114 cycles and 9.0e-7 when the steps stop at the tolerance;
 #: ``benchmarks/bench_accelerated.py``)
 SLOW_SETTLED = 1e-11
 
