@@ -268,3 +268,78 @@ def test_the_step_control_errors_quoted_in_docs_discrete3d():
         res = simulate3d(_system3(), _load3(1e3, 3e9, 303.0), cycles=20, steps_per_cycle=16,
                          tol=1e-8, step_tol=step_tol)
         assert abs(res.dissipation_per_cycle - D) / D == pytest.approx(quoted, rel=0.05)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), big=st.sampled_from([0.0, 1e3, 1e9]),
+       tol=st.sampled_from([1e-6, 1e-11]))
+def test_the_compiled_kernels_residual_scale_is_the_python_one(seed, big, tol):
+    """fastcycle's compiled residual scale (slips of a run in contact, w = 0) equals
+    ResidualScale.scale on random coupled 2-D systems and changes of some slips, with
+    slips up to 1e9 m (where the round-off floor decides)."""
+    from slipcycle.discrete.fastcycle import _residual_scale, _scale_args
+
+    rng = np.random.default_rng(seed)
+    n = 4
+    M = rng.normal(size=(2 * n, 2 * n))
+    Kf = M @ M.T / (2 * n) + np.eye(2 * n)
+    system = FrictionalSystem(Kf[:n, :n], 0.3 * Kf[n:, :n], Kf[n:, n:],
+                              rng.uniform(0.2, 0.5, n), accept_ill_posed=True)
+    load = DiscreteLoad.harmonic(rng.uniform(1, 2, n), rng.normal(size=n),
+                                 rng.uniform(0, 0.3, n), rng.uniform(0, 0.6, n),
+                                 rng.uniform(0, 6, n), rng.uniform(0, 6, n))
+    theta, vals = load.cycle_samples(16)
+    va = rng.normal(size=n) * (1.0 + big * (rng.uniform(size=n) < 0.5))
+    vb = va + np.where(rng.uniform(size=n) < 0.5, 1e-9 * rng.normal(size=n), 0.0)
+    disp = float(np.abs(vals).max()) / system.stiffness_scale()
+    scale = ResidualScale.of(system, vals, disp)
+    service, qabs, pabs = _scale_args(system, vals, disp)
+    got = _residual_scale(system.A, system.B, system.friction, qabs, pabs, va, vb, service,
+                          tol)
+    want = scale.scale(np.concatenate([va, np.zeros(n)]), np.concatenate([vb, np.zeros(n)]),
+                       tol)
+    assert got == pytest.approx(want, rel=1e-12)
+
+
+def _coupled_clamped(clamp: float):
+    """The random coupled 5-node 3-D system of test_discrete3d_steady_jump (seed 2) with
+    node 0's normal load raised by ``clamp`` [N] (it then stays stuck)."""
+    n = 5
+    rng = np.random.default_rng(2)
+    M = rng.normal(size=(3 * n, 3 * n))
+    Kf = M @ M.T / (3 * n) + np.eye(3 * n)
+    t = np.arange(2 * n)
+    system = FrictionalSystem3D(Kf[np.ix_(t, t)], 0.3 * Kf[2 * n:, :2 * n],
+                                Kf[2 * n:, 2 * n:], rng.uniform(0.25, 0.4, n),
+                                accept_ill_posed=True)
+    amp = 0.05 + 0.5 * (rng.uniform(size=n) < 0.4)
+    q1 = np.column_stack([amp, 0.7 * amp]).ravel()
+    ph = np.column_stack([np.zeros(n), np.full(n, -np.pi / 2)]).ravel()
+    p0 = np.full(n, 2.0)
+    p0[0] += clamp
+    load = Load3D.harmonic(p0, 0.1 * rng.normal(size=2 * n), 0.3 * rng.uniform(size=n), q1,
+                           np.zeros(n), ph)
+    return system, load
+
+
+def test_a_coupled_3d_system_gives_the_same_cycle_under_any_clamp():
+    """Node 0 of a coupled 5-node system clamped by 1e4, 1e8 and 1e10 N stays stuck, so
+    the steady cycle of the others cannot depend on the clamp: D agrees to 1e-7 (with the
+    Newton and event tolerances of the cycles relative to the whole load, D was 4.5e-4
+    and 3.1e-2 off at 1e8 and 1e10 N). The Newton solves end far below their tolerance:
+    at 1e8 N it is 3.9e-6 m as a displacement, and plain cycling at tol 1e-11 converges
+    with cycle changes of 3e-12 m, so the residual's floor needs no term for it."""
+    kw = dict(cycles=80, steps_per_cycle=40, tol=1e-11, step_tol=1e-6, accelerate=False,
+              record=False)
+    runs = {c: simulate3d(*_coupled_clamped(c), **kw) for c in (1e4, 1e8, 1e10)}
+    for res in runs.values():
+        assert res.steady_state == "cyclic_slip" and res.cycles_run < 80
+    for c in (1e8, 1e10):
+        assert runs[c].dissipation_per_cycle == pytest.approx(
+            runs[1e4].dissipation_per_cycle, rel=1e-7)
+    res = runs[1e8]
+    system = _coupled_clamped(1e8)[0]
+    assert 1e-13 * res.force_scale / system.stiffness_scale() == pytest.approx(3.9e-6,
+                                                                                rel=0.05)
+    last = np.abs(res.cycle_start_states[-1] - res.cycle_start_states[-2]).max()
+    assert last < 1e-11
