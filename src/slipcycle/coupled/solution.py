@@ -40,8 +40,10 @@ class CycleSolution:
         ``shakedown``, ``cyclic_slip``, ``ratcheting`` or ``not_converged``
         (:class:`~slipcycle.result.SteadyState` words).
     residual : float
-        max |x_c − x_{c−1}| of the start-of-cycle states of the last two cycles, relative
-        to the displacement scale (for ratcheting: of their differences) [1].
+        max |x_c − x_{c−1}| of the start-of-cycle states of the last two cycles (for
+        ratcheting: of their differences), relative to the service cycle's displacement
+        scale with its round-off floor
+        (:class:`~slipcycle.coupled.cycles.ResidualScale`) [1].
     cycles_run : int
     dissipation_per_node : (N,) array
         D_j = −∮ q_j · dv_j of the last cycle run [J].
@@ -62,7 +64,7 @@ class CycleSolution:
     all_slip_or_separated : bool
         Every node slipped or separated at some instant of the last cycle (memory erased).
     disp_scale : float
-        Displacement scale F / max diag K [m].
+        Displacement scale F / max diag K of the whole load [m].
     force_scale : float
         Force scale F of the loads [N].
     slip_length : (N,) array
