@@ -203,11 +203,12 @@ def lu_solve(lu, piv, b):  # pragma: no cover - compiled
 def _elim_step(R, ns, m, lu, piv, W, KSP, phi, nvec, fS, y):  # pragma: no cover
     """The Newton step (m,) of the condensed system (the separated rows eliminated:
     ``StepSolver._separated_block``); ``y`` = K_PP⁻¹ R_P, used while R_P ≠ 0 (before
-    the first step: the separated rows are linear and solved exactly by it)."""
+    the first step: the separated rows are linear and solved exactly by it); an empty
+    ``y``: R_P is within the Newton tolerance and is left as it is."""
     s = 2 * ns
     rhs = -R[:s]
     ry = False
-    for k in range(s, m):
+    for k in range(s, m if y.size else s):
         if R[k] != 0.0:
             ry = True
             break

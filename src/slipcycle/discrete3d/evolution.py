@@ -240,6 +240,10 @@ class StepSolver:
         self._blocks = _Cache(budget)
         self._elims = _Cache(budget)
         self._chos = _Cache(budget)
+        # the condensed blocks last used per separated set (:meth:`_coupling`): solver
+        # state like the chord-step factors (they enter the steps at round-off, so their
+        # bound is a function of the system, not of cache_bytes)
+        self._condensed = _Cache(max(2 ** 26, 4 * self.K.nbytes))
         # the chord-step factors change the Newton path (not the solution): few are kept
         self._max_blocks = 8
         self._lus: dict = {}
@@ -369,7 +373,7 @@ class StepSolver:
         return hit
 
     def _separated_block(self, key, KVU, ns, npp):
-        """The separated nodes' rows condensed once per active set (block elimination).
+        """The separated nodes' rows condensed per active set (block elimination).
 
         With s = 2 ns slip unknowns and the separated ones P, the Newton matrix is
         [[J_SS, J_SP], [K_PS, K_PP]], where K_PP (a principal block of the positive
@@ -377,7 +381,7 @@ class StepSolver:
         linear map L of the rows of K: J_S· = L(K_{VS,·}) (+ ρΦ on the own columns).
         Hence the Schur complement is the slip Jacobian of K̃ = K_{VS,S} − K_{VS,P} W,
         W = K_PP⁻¹ K_PS, a system of 2 ns unknowns instead of 2 ns + 3 npp: the lap
-        joint's open nodes (most of its interface) cost one Cholesky per active set.
+        joint's open nodes (most of its interface) cost one Cholesky per separated set.
 
         Returns
         -------
@@ -385,24 +389,69 @@ class StepSolver:
             (Cholesky factor of K_PP, W (p, s), K̃ (s + ns, s), K_{VS,P} (s + ns, p));
             None when K_PP does not factorise (then the full matrix is used).
         """
-        hit = self._elims.get(key)
-        if hit is None:
-            s, m = 2 * ns, 2 * ns + 3 * npp
-            # K_PP depends on the separated set only, which changes far less often than
-            # the slipping one: its factor is kept per separated set
-            cho = self._chos.get(key[1])
-            if cho is None:
-                try:
-                    cho = cho_factor(KVU[s:m, s:m], lower=True, check_finite=False)
-                except LinAlgError:
-                    return None
-                self._chos.put(key[1], cho)
+        last = self._condensed.get(key[1])
+        if last is not None and last[0] == key[0]:
+            return last[1]
+        s, m = 2 * ns, 2 * ns + 3 * npp
+        # K_PP depends on the separated set only, which changes far less often than
+        # the slipping one: its factor is kept per separated set
+        cho = self._chos.get(key[1])
+        if cho is None:
+            try:
+                cho = cho_factor(KVU[s:m, s:m], lower=True, check_finite=False)
+            except LinAlgError:
+                return None
+            self._chos.put(key[1], cho)
+        KSP = self._elims.get(key)
+        if KSP is None:
             KSP = np.vstack([KVU[:s, s:m], KVU[m:, s:m]])
-            W = np.ascontiguousarray(cho_solve(cho, KVU[s:m, :s], check_finite=False))
-            Kt = np.vstack([KVU[:s, :s], KVU[m:, :s]]) - KSP @ W
-            hit = (cho, W, Kt, KSP)
-            self._elims.put(key, hit)
+            self._elims.put(key, KSP)
+        S = np.frombuffer(key[0], np.int64)
+        W, Kt = self._coupling(S, cho, KVU, KSP, ns, last)
+        hit = (cho, W, Kt, KSP)
+        self._condensed.put(key[1], (key[0], hit, S))
         return hit
+
+    @staticmethod
+    def _coupling(S, cho, KVU, KSP, ns, last):
+        """W = K_PP⁻¹ K_PS (p, s) and K̃ = K_{VS,S} − K_{VS,P} W (s + ns, s) of the
+        slipping nodes ``S`` (:meth:`_separated_block`).
+
+        The slipping set changes more often than the separated one, and a column of W
+        depends only on the separated set and its own slip unknown, an entry of K̃ only
+        on the separated set and its two nodes: what W and K̃ of the slipping set
+        ``last`` (the one last used with this separated set, or None) hold for the nodes
+        slipping in both is copied, and only the new nodes' columns of W (p² each
+        instead of p² per column) and rows and columns of K̃ are computed. Each entry is
+        computed once, so copies do not accumulate round-off.
+        """
+        s = 2 * ns
+        m = KVU.shape[1]
+        if last is None:
+            W = np.ascontiguousarray(cho_solve(cho, KVU[s:m, :s], check_finite=False))
+            return W, np.vstack([KVU[:s, :s], KVU[m:, :s]]) - KSP @ W
+        S_last, (_, W_last, Kt_last, _) = last[2], last[1]
+        pos = np.searchsorted(S_last, S)
+        old = (pos < S_last.size) & (S_last[np.minimum(pos, S_last.size - 1)] == S)
+        # the slip unknowns (the columns, the tangential rows of K̃), the normal rows
+        cols_old, cols_new = np.flatnonzero(np.repeat(old, 2)), np.flatnonzero(
+            np.repeat(~old, 2))
+        src = (2 * pos[old, None] + np.arange(2)).ravel()
+        rows_old = np.concatenate([cols_old, s + np.flatnonzero(old)])
+        rows_src = np.concatenate([src, 2 * S_last.size + pos[old]])
+        rows_new = np.concatenate([cols_new, s + np.flatnonzero(~old)])
+        W = np.empty((m - s, s))
+        W[:, cols_old] = W_last[:, src]
+        if cols_new.size:
+            W[:, cols_new] = cho_solve(cho, KVU[s:m, cols_new], check_finite=False)
+        Kt = np.empty((s + ns, s))
+        Kt[np.ix_(rows_old, cols_old)] = Kt_last[np.ix_(rows_src, src)]
+        if cols_new.size:
+            base = np.vstack([KVU[:s], KVU[m:]])
+            Kt[:, cols_new] = base[:, cols_new] - KSP @ W[:, cols_new]
+            Kt[np.ix_(rows_new, cols_old)] = (base[np.ix_(rows_new, cols_old)]
+                                               - KSP[rows_new] @ W[:, cols_old])
+        return W, Kt
 
     def _keep(self, key, lu) -> None:
         """Keep the factorised Newton matrix of an active set for chord steps."""
@@ -474,8 +523,11 @@ class StepSolver:
         if elim is not None:
             kind, W, KSP = 2, elim[1], elim[3]
             rP = r[V[2 * ns:m]]
-            if np.any(rP):
-                # K_PP⁻¹ R_P of the separated rows, linear: zero after the first step
+            if np.max(np.abs(rP)) > self.force_tol:
+                # K_PP⁻¹ R_P of the separated rows, linear: zero after the first step. A
+                # residual already within the Newton tolerance (the round-off the last
+                # round left, in most rounds) is kept as it is, the steps solve
+                # K_PS dS + K_PP dP = 0 and do not change it: a p² solve saved
                 y = cho_solve(elim[0], rP, check_finite=False)
         lu = self._lus.get(key)
         res_prev, stepped, fresh, first = np.inf, False, False, True
@@ -618,6 +670,14 @@ class Evolution3D:
         Step doubling (default) or fixed steps.
     extrapolate : bool
         Richardson extrapolation of smooth doubled steps (default True).
+
+    Attributes
+    ----------
+    disp_scale : float
+        Displacement scale [m] of the step control: state errors relative to it, energy
+        errors to max diag K × its square. ``force_scale`` / max diag K at first; the
+        steady-state driver sets the service cycle's once the assembly is done
+        (:func:`~slipcycle.discrete3d.steady.simulate3d`).
     """
 
     #: split a step at the instant a node closes or opens inside it, or starts to slip
@@ -640,7 +700,8 @@ class Evolution3D:
         self.n = system.n_nodes
         self.K = system.K
         self.F = float(force_scale)
-        self.disp_scale = self.F / system.stiffness_scale()
+        self.stiffness = system.stiffness_scale()
+        self.disp_scale = self.F / self.stiffness
         self.solver = StepSolver(system, self.F)
         self.step_tol = float(step_tol)
         self.max_depth = int(max_depth)
@@ -650,7 +711,7 @@ class Evolution3D:
         self.x = np.array(x0, float)
         self.r_w = np.array(r_w0, float)
         self.r = self.r_w + self.K @ self.x
-        disp_tol = 1e-12 * self.disp_scale
+        disp_tol = 1e-12 * self.F / self.stiffness
         self.modes = np.where(self.x[2 * self.n:] > disp_tol, SEPARATED, STICK).astype(np.int8)
         self._totals: PathTotals3D | None = None
         #: set to a list to record every committed step (x, r, modes, x_before) for checks
@@ -731,7 +792,8 @@ class Evolution3D:
         err, d_full, d_half = doubling_error(x0, r0, full.x, full.r, h1.x, h1.r, h2.x,
                                              h2.r, self.n)
         err /= self.disp_scale
-        err_d = abs(d_full - d_half) / (self.F * self.disp_scale)
+        # energy errors relative to max diag K × disp_scale² (F × disp_scale at first)
+        err_d = abs(d_full - d_half) / (self.stiffness * self.disp_scale ** 2)
         if smooth is None:
             smooth = self._smooth(full, h1, h2)
         # the estimate is that of the half-step (first-order) result; the extrapolated
