@@ -155,3 +155,27 @@ def test_cone_program_ties_each_contact_set_once_and_each_sample_row_is_sparse()
     assert rows.G_cone.shape[0] == 3 * closed and rows.G_gap.shape[0] == res.open_set.sum()
     lo, hi = lambda2_polygonal(system, load, res.open_set, 256, 24)
     assert lo <= res.lambda2 * (1 + 1e-7) and res.lambda2 <= hi * (1 + 1e-7)
+
+
+def test_contact_set_that_cycles_is_refused_at_once(monkeypatch):
+    """A node pressed by the load (free, it would penetrate) but stuck at a slip that
+    pulls it off (p < 0 when closed) has no contact state: the active-set iteration
+    meets a set twice and stops with an error after a few solves, instead of 4 N + 10."""
+    import slipcycle.discrete3d.separation as separation
+    from slipcycle.errors import SolverError
+
+    k, b, c = 2.0, 1.0, 2.0
+    K = np.array([[k, 0, b], [0, k, 0], [b, 0, c]])
+    system = FrictionalSystem3D(K[:2, :2], K[2:, :2], K[2:, 2:], 0.3, accept_ill_posed=True)
+    r = np.array([0.0, 0.0, 1.0])
+    slip = np.array([-2.0 / b, 0.0])
+    # both states are wrong: closed it pulls, open it penetrates
+    assert (elastic_reactions(system, r, slip, np.array([False]))[0][2] < 0
+            and elastic_reactions(system, r, slip, np.array([True]))[1][2] < 0)
+    solves = []
+    real = separation.elastic_reactions
+    monkeypatch.setattr(separation, "elastic_reactions",
+                        lambda *a: solves.append(1) or real(*a))
+    with pytest.raises(SolverError, match="did not settle"):
+        separation.elastic_open_set(system, r, slip)
+    assert len(solves) <= 4

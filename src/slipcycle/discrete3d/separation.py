@@ -81,7 +81,8 @@ def elastic_open_set(system: FrictionalSystem3D, r: np.ndarray, slip: np.ndarray
     Raises
     ------
     SolverError
-        If the active-set iteration does not settle within 4 N + 10 changes.
+        If the active-set iteration cycles (meets a set twice under the least-index
+        rule) or does not settle within 4 N + 10 changes.
     """
     n = system.n_nodes
     K = system.K
@@ -91,7 +92,7 @@ def elastic_open_set(system: FrictionalSystem3D, r: np.ndarray, slip: np.ndarray
     if start is None:
         start = r[2 * n:] + system.B @ slip < 0
     is_open = np.asarray(start, bool).copy()
-    seen = set()
+    seen, pivoted = set(), set()
     for it in range(4 * n + 10):
         reac, x = elastic_reactions(system, r, slip, is_open)
         p, w = reac[2 * n:], x[2 * n:]
@@ -104,7 +105,12 @@ def elastic_open_set(system: FrictionalSystem3D, r: np.ndarray, slip: np.ndarray
             seen.add(key)
             is_open = is_open ^ wrong
         else:
-            # ... then the least-index rule, one node per step
+            # ... then the least-index rule, one node per step. Each step depends on the
+            # set alone, so a set met twice means a cycle that never settles: a node
+            # stuck at its slip would pull (p < 0) and, free, would penetrate (w < 0)
+            if key in pivoted:
+                break
+            pivoted.add(key)
             j = int(np.flatnonzero(wrong)[0])
             is_open[j] = not is_open[j]
     raise SolverError("the contact set of the elastic solution did not settle")

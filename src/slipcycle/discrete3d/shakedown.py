@@ -301,6 +301,10 @@ def _socp(rows: _Rows, lam_max: float, tol: float):
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = tol
+    # supernodal factorisation: the ties' dense block factorises as a dense front
+    # (1.5x faster than QDLDL at 203 nodes)
+    settings.direct_solve_method = "faer"
+    settings.max_threads = 1
     c = np.zeros(nv)
     c[ns] = -1.0
     # no quadratic term: with the ties as equality rows, a regularisation of v (least-norm
