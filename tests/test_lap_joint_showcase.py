@@ -1,9 +1,9 @@
 """The assembly showcase of a lap joint in one command (issue 33 item 6).
 
-One ``lap_joint`` case with elastic bolts, tightening orders, a fit-up and an overload
-protocol, ``melan_check = true`` and a ``[lap_joint.window]`` runs, on two meshes, the
-protocol study, the same protocols with B = 0 and the shakedown window. Checked on a
-small joint (two meshes of 40-odd and 60-odd contact nodes): the report's tables and
+The shipped ``lap_joint_assembly.toml`` (elastic bolts, tightening orders, a fit-up and an
+overload protocol, ``melan_check = true`` and a ``[lap_joint.window]``) runs, on two
+meshes, the protocol study, the same protocols with B = 0 and the shakedown window.
+Checked on it (two meshes of 75 and 92 contact nodes): the report's tables and
 figures; B = 0 gives one dissipation for every protocol (the frictional Melan converse)
 where the coupled joint's fit-up differs by more than 20 %; every protocol's shakedown
 limit lies at or below its λ2 (the cone program, independent of the engine's runs); the
@@ -16,23 +16,16 @@ import json
 
 import numpy as np
 import pytest
-from test_lap_joint_study import SMALL
 
 from slipcycle.cli.main import main
+from slipcycle.examples import example_path
 from slipcycle.io import parse_case_text
 from slipcycle.joints.lap_joint_case import joint_contact, read_lap_joint_case
 from slipcycle.joints.lap_joint_showcase import LapJointShowcase, lap_joint_showcase
 
-SHOWCASE = (SMALL.replace("friction = 0.3\n", "friction = 0.3\nbolt_modulus = 210e9\n"
-                          "melan_check = true\n", 1)
-            .replace('names = ["sequential", "reversed", "simultaneous"]',
-                     'names = ["sequential", "simultaneous", "fit_up", "overload"]\n'
-                     "[lap_joint.protocols.steps]\n"
-                     "fit_up = [{service = 900.0}, {tighten = [0, 1]}, {release = true}]\n"
-                     "overload = [{tighten = [0, 1]}, {overload = 3000.0}]")
-            .replace("[lap_joint.convergence]", "[lap_joint.window]\nlam_points = 3\n"
-                     "lam_tol = 0.2\n[lap_joint.convergence]")
-            .replace('fields = ["xdmf"]', "fields = []"))
+#: the shipped one-command showcase (the small joint of tests/test_lap_joint_study.py with
+#: elastic bolts, a fit-up and an overload protocol, B = 0 twins and the window)
+SHOWCASE = example_path("lap_joint_assembly.toml").read_text(encoding="utf-8")
 
 
 @pytest.fixture(scope="module")
@@ -130,6 +123,13 @@ def test_docs_showcase_numbers_are_the_command_lines(showcase_cli):
                                rtol=6e-4)
     np.testing.assert_allclose(quoted(rf"fit-up {num} / {num} µJ"), d[:, fit], rtol=6e-4)
     np.testing.assert_allclose(quoted(rf"overload {num} / {num} µJ"), d[:, ovl], rtol=6e-4)
+    orders = quoted(rf"the orders differ by {num} % and {num} %, far less than the {num} % "
+                    "between the meshes")
+    np.testing.assert_allclose(orders[:2], [100 * abs(d[0, sim] / d[0, seq] - 1),
+                                            100 * abs(d[1, sim] / d[1, seq] - 1)],
+                               atol=0.06)        # percent, quoted to one decimal
+    assert orders[2] == pytest.approx(100 * (1 - d[1, seq] / d[0, seq]), rel=0.03)
+    assert orders[2] > 10 * max(orders[:2])
     pct = quoted(rf"{num} % / {num} % above sequential")
     assert pct == [round(100 * (d[m, fit] / d[m, seq] - 1)) for m in range(2)]
     np.testing.assert_allclose(quoted(rf"every protocol {num}–{num} µJ on the fine mesh"),

@@ -5,7 +5,7 @@ The assembly decides the damping: a lap joint's showcase (beyond the source pape
 Barber (2012, §1, §3): in a coupled frictional system the assembly protocol — the order
 in which the bolts are tightened, or the loading path before the steady cycle — can
 decide how much a joint dissipates and whether it shakes down. One ``lap_joint`` case
-runs the argument (``slipcycle run lap_joint_assembly.toml`` on the shipped joint): two
+runs the argument (``slipcycle run lap_joint_assembly.toml``, a small shipped joint): two
 bolts of steel (elastic: tightening one unloads the other), tightened in turn or
 together, tightened while the upper grip is held 900 N out of line and then released
 (fit-up), or overloaded to 3 kN before service; each protocol cycled to its steady state,
@@ -13,54 +13,29 @@ again with B = 0 (the frictional Melan converse: one answer for every protocol),
 shakedown window of the protocols (λ2 with separation and the service amplitude up to
 which each one shakes down).
 
-Here the small joint of the tests on its coarser mesh (h = 5.2 mm) with a window
-grid of three amplitudes. Left of the figure: the steady dissipation of every protocol,
+Here that case's joint on its coarser mesh (75 contact nodes) with its window grid of
+three amplitudes. Left of the figure: the steady dissipation of every protocol,
 coupled and with B = 0; right: the class of each protocol over the service amplitude.
 The fit-up dissipates about half as much again as plain tightening, while with B = 0 the
 protocols agree to 0.1 %. The numbers on both meshes are in docs/lap_joint.md
 ("Showcase"), checked by tests/test_lap_joint_showcase.py.
-Run time: about 17 s of CPU, a minute of wall time on a busy 2-core machine.
+Run time: about 15 s of CPU, a minute of wall time on a busy 2-core machine.
 """
 
 # %%
 import matplotlib.pyplot as plt
 import numpy as np
 
-from slipcycle.io import parse_case_text
+from slipcycle.examples import example_path
+from slipcycle.io import read_case
 from slipcycle.joints.lap_joint_case import coarser_joint, joint_contact, read_lap_joint_case
-from slipcycle.joints.lap_joint_showcase import WindowOptions, lap_joint_showcase
+from slipcycle.joints.lap_joint_showcase import lap_joint_showcase
 
-CASE = """
-model = "lap_joint"
-[lap_joint]
-plate_width = 0.052
-bolt_count = 2
-bolt_diameter = 0.006
-washer_diameter = 0.016
-mesh_size = 0.008
-friction = 0.3
-bolt_modulus = 210e9
-[lap_joint.loading]
-preload = 10e3
-service_amplitude = 2e3
-[lap_joint.protocols]
-names = ["sequential", "simultaneous", "fit_up", "overload"]
-[lap_joint.protocols.steps]
-fit_up = [{service = 900.0}, {tighten = [0, 1]}, {release = true}]
-overload = [{tighten = [0, 1]}, {overload = 3000.0}]
-[lap_joint.convergence]
-coarsening = [1.25]
-[run]
-cycles = 20
-steps_per_cycle = 12
-steady_tol = 1e-6
-step_tolerance = 1e-4
-"""
-
-lc = read_lap_joint_case(parse_case_text(CASE))
+# the shipped showcase case (its joint, protocols and run settings)
+lc = read_lap_joint_case(read_case(example_path("lap_joint_assembly.toml")))
 contact = joint_contact(coarser_joint(lc.joint, lc.coarsening[0]))
 show = lap_joint_showcase(contact, lc.protocols, lc.settings, melan_check=True,
-                          window=WindowOptions(lam_points=3, lam_tol=0.2), fields=())
+                          window=lc.window, fields=())
 names = [p.name for p in lc.protocols]
 d, d0 = 1e6 * show.dissipation, 1e6 * show.decoupled.dissipation
 print(f"{contact.n_nodes} contact nodes")

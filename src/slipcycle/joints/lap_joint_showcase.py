@@ -51,8 +51,9 @@ class WindowOptions:
     lam_tol : float
         Width of each protocol's limit bracket relative to ``lam_max``.
     meshes : tuple of int or None
-        The meshes (0 the coarsest) the window is computed on; None: every mesh. (λ2's
-        cone program is dense: at 751 contact nodes it needs over 4 GB.)
+        The meshes (0 the coarsest) the window is computed on; None: every mesh. (λ2
+        of a 751-node joint takes about two CPU minutes; each protocol's limit is
+        bracketed by runs of the engine.)
     """
 
     lam_points: int = 5
