@@ -52,8 +52,8 @@ class WindowOptions:
         Width of each protocol's limit bracket relative to ``lam_max``.
     meshes : tuple of int or None
         The meshes (0 the coarsest) the window is computed on; None: every mesh. (λ2
-        of a 751-node joint takes about two CPU minutes; each protocol's limit is
-        bracketed by runs of the engine.)
+        of a 751-node joint takes about 20 CPU s; each protocol's limit is bracketed by
+        runs of the engine, which dominate.)
     """
 
     lam_points: int = 5
