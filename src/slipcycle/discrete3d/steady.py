@@ -53,14 +53,14 @@ above plain cycling's limit — a hundredth of the step control's error of D at
 the same mixing moved the dissipation by up to 3e-4, which is why the 2-D model follows
 its exact piecewise-affine map instead, :mod:`slipcycle.discrete.periodic`). On the
 CalculiX C3D8I block of 121 contact nodes (``benchmarks/bench_accelerated.py``) the
-mixing ends after 61 cycles with D 8.6e-5 and the state 7.8e-4 of the slip scale off
-plain cycling's limit, while the creep of its certifying cycles reads 1e-9: no cycle sees
-a jump to another member of the set. Nor does a gentler extrapolation follow the
-trajectory: reduced rank extrapolation of that block's plain sequence (window 2–13)
-leaves an error of about 20 d² (d the plain sequence's distance to its limit, relative to
-the slip scale: the sequence is no sum of a few geometric terms), and plain cycling from
-the extrapolated state keeps much of that error on the set of steady states (jumps that
-landed 9.4e-4, 1.5e-5 and 3.2e-6 off end 5.1e-5, 6.8e-6 and 3.2e-6 from plain cycling's
+mixing ends after 62 cycles with D 8.7e-5 and the state 8.0e-4 of the slip scale off
+plain cycling's limit, while the creep of its certifying cycles reads about 1e-9: no
+cycle sees a jump to another member of the set. Nor does a gentler extrapolation follow
+the trajectory: reduced rank extrapolation of that block's plain sequence (windows 3–12)
+leaves an error of 6–19 d² (d the plain sequence's distance to its limit, relative to the
+slip scale: the sequence is no sum of a few geometric terms), and plain cycling from the
+extrapolated state keeps much of that error on the set of steady states (jumps that
+landed 1.3e-3, 4.2e-5 and 2.9e-6 off end 7.2e-5, 4.2e-5 and 2.9e-6 from plain cycling's
 limit; ``bench_accelerated.extrapolation_rows``): within 1e-6 of that limit a jump saves
 few cycles. Plain cycling is the default (``accelerate`` None or False); an Anderson
 run's certificate reports :data:`ANDERSON_DISTANCE`, the largest distances measured on
@@ -143,8 +143,8 @@ ANDERSON_PATIENCE = 8
 
 #: (state, D): the distances of an Anderson-mixed steady state from plain cycling's
 #: limit that its certificate reports at least (relative to the slip scale, and to D),
-#: the largest measured on the benchmark systems rounded up: the CalculiX block 7.8e-4
-#: and 8.6e-5 (``benchmarks/bench_accelerated.py``), the FE-like chain of 500 nodes
+#: the largest measured on the benchmark systems rounded up: the CalculiX block 8.0e-4
+#: and 8.7e-5 (``benchmarks/bench_accelerated.py``), the FE-like chain of 500 nodes
 #: 1.7e-3 and 4.1e-5 (module docstring). Measured, not a bound for every system.
 ANDERSON_DISTANCE = (2e-3, 1e-4)
 
