@@ -226,7 +226,8 @@ print(json.dumps({"wall": time.perf_counter() - t0, "cpu": time.process_time() -
                   "nodes": s["n_nodes"], "protocols": len(s["protocols"]),
                   "meshes": len(s["mesh_spacing"]),
                   "D": s["protocol_dissipation_per_cycle"],
-                  "D0": s["decoupled_protocol_dissipation_per_cycle"]}))
+                  "D0": s["decoupled_protocol_dissipation_per_cycle"]},
+                 default=lambda a: a.tolist()))
 """
 
 
