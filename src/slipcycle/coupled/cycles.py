@@ -17,8 +17,8 @@ import numpy as np
 from slipcycle.loading.nodal import force_scale
 from slipcycle.loading.service import service_force_scale
 
-__all__ = ["run_scales", "assemble", "CycleHistory", "ResidualScale", "ratchet_residual",
-           "ROUNDOFF", "STEP_ROUNDOFF"]
+__all__ = ["run_scales", "assemble", "for_cycles", "CycleHistory", "ResidualScale",
+           "ratchet_residual", "ROUNDOFF", "STEP_ROUNDOFF"]
 
 #: round-offs (units of the machine epsilon) of a term that a cycle-to-cycle change of a
 #: state component must exceed to be told from the round-off of the state (the updates of
@@ -84,6 +84,26 @@ def assemble(evolution: Callable, system, r0: np.ndarray, F: float,
     evo.follow(np.arange(len(path), dtype=float), path)
     evo.resync()
     return evo
+
+
+def for_cycles(evolution: Callable, evo, samples: np.ndarray, F: float):
+    """The evolution the cycles run on: ``evo`` (assembled with tolerances relative to
+    the whole load F [N]) continued from its state with tolerances relative to the
+    service cycle's force scale (:func:`~slipcycle.loading.service.service_force_scale`;
+    a preload would hide the service slip); ``evo`` itself where the two coincide.
+
+    Parameters
+    ----------
+    evolution : callable
+        ``evolution(x0, r0, force_scale)``: the model's evolution engine.
+    evo : the assembled evolution, at θ = 0.
+    samples : (S, M) array
+        Load samples of one cycle [N] (the first at θ = 0).
+    F : float
+        Force scale of the whole load [N].
+    """
+    F_cycles = service_force_scale(samples, F)
+    return evo if F_cycles == F else evolution(evo.x, samples[0], F_cycles)
 
 
 @dataclass(frozen=True, eq=False)

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from slipcycle.coupled.cycles import CycleHistory, assemble, run_scales
+from slipcycle.coupled.cycles import CycleHistory, assemble, for_cycles, run_scales
 from slipcycle.coupled.driver import (
     SKIP,
     STEADY,
@@ -64,7 +64,6 @@ from slipcycle.discrete.periodic import (
 )
 from slipcycle.errors import InadmissibleInitialState
 from slipcycle.kernels.creep import creep_distance
-from slipcycle.loading.service import service_force_scale
 from slipcycle.result import STEADY_STATES
 
 __all__ = ["SteadyResult", "simulate", "initial_state", "InadmissibleInitialState",
@@ -443,7 +442,7 @@ def simulate(system: FrictionalSystem, load: DiscreteLoad, *, cycles: int = 40,
     settings = RunSettings(cycles=cycles, steps_per_cycle=steps_per_cycle, tol=tol,
                            min_cycles=min_cycles)
     theta, vals, F, disp_scale = run_scales(system, load, steps_per_cycle, protocol)
-    evo = _assembled(system, vals[0], F, initial_slip, protocol, service_force_scale(vals, F))
+    evo = _assembled(system, vals, F, initial_slip, protocol)
     x_init = evo.x.copy()
     history = CycleHistory.of_run(system, vals, disp_scale, tol, evo.x, record)
     run = CycleState(system, evo, settings, history, vals[0], F)
@@ -715,18 +714,18 @@ class SlowModes:
         return target, remaining <= max(POLISH * tol, min(tol, SLOW_SETTLED)) * run.xscale
 
 
-def _assembled(system: FrictionalSystem, r0: np.ndarray, F: float,
-               initial_slip: np.ndarray | None, protocol: np.ndarray | None,
-               F_cycles: float | None = None) -> Evolution:
+def _assembled(system: FrictionalSystem, vals: np.ndarray, F: float,
+               initial_slip: np.ndarray | None, protocol: np.ndarray | None) -> Evolution:
     """The evolution at θ = 0 (:func:`~slipcycle.coupled.cycles.assemble`), assembled
-    with tolerances relative to the whole load F [N]; the cycles' evolution from there
-    with tolerances relative to ``F_cycles`` [N] (default F): the service cycle's
-    (:func:`~slipcycle.loading.service.service_force_scale`)."""
-    evo = assemble(lambda x0, rw: Evolution(system, x0, rw, F), system, r0, F, initial_slip,
+    with tolerances relative to the whole load F [N], continued for the cycles with the
+    service cycle's (:func:`~slipcycle.coupled.cycles.for_cycles`); ``vals`` the (S, M)
+    load samples [N]."""
+    def evolution(x0, rw, scale):
+        return Evolution(system, x0, rw, scale)
+
+    evo = assemble(lambda x0, rw: evolution(x0, rw, F), system, vals[0], F, initial_slip,
                    protocol, initial_state)
-    if F_cycles is None or F_cycles == F:
-        return evo
-    return Evolution(system, evo.x, r0, F_cycles)
+    return for_cycles(evolution, evo, vals, F)
 
 
 def _steady_result(system, evo, state, residual, ratchet, totals, starts, events, diss_hist,

@@ -110,7 +110,7 @@ from scipy.optimize import nnls
 
 from slipcycle.coupled.anderson import anderson as _anderson
 from slipcycle.coupled.anderson import geometric as _geometric
-from slipcycle.coupled.cycles import CycleHistory, assemble, run_scales
+from slipcycle.coupled.cycles import CycleHistory, assemble, for_cycles, run_scales
 from slipcycle.coupled.driver import (
     SKIP,
     STEADY,
@@ -127,7 +127,6 @@ from slipcycle.discrete3d.model import FrictionalSystem3D
 from slipcycle.errors import InadmissibleInitialState
 from slipcycle.kernels.creep import creep_distance
 from slipcycle.kernels.threads import single_threaded
-from slipcycle.loading.service import service_force_scale
 
 __all__ = ["SteadyResult3D", "simulate3d", "initial_state_3d", "InadmissibleInitialState3D",
            "STEADY_CLASSES"]
@@ -304,14 +303,14 @@ def simulate3d(system: FrictionalSystem3D, load: Load3D, *, cycles: int = 40,
     theta, vals, F, disp_scale = run_scales(system, load, steps_per_cycle, protocol)
     opts = {"step_tol": step_tol, "adaptive": adaptive, "substeps": substeps,
             "extrapolate": extrapolate}
-    evo = assemble(lambda x0, rw: Evolution3D(system, x0, rw, F, **opts), system, vals[0], F,
-                   initial_slip, protocol, initial_state_3d)
+    def evolution(x0, rw, scale):
+        return Evolution3D(system, x0, rw, scale, **opts)
+
+    evo = assemble(lambda x0, rw: evolution(x0, rw, F), system, vals[0], F, initial_slip,
+                   protocol, initial_state_3d)
     # the cycles' force tolerances, step control and steady-state residual follow the
-    # service cycle, not the whole load the assembly was stepped on (a preload would
-    # hide the service slip)
-    F_cycles = service_force_scale(vals, F)
-    if F_cycles != F:
-        evo = Evolution3D(system, evo.x, vals[0], F_cycles, **opts)
+    # service cycle, not the whole load the assembly was stepped on
+    evo = for_cycles(evolution, evo, vals, F)
     history = CycleHistory.of_run(system, vals, disp_scale, tol, evo.x, record)
     evo.disp_scale = history.scale.step_scale(evo.x, step_tol)
     run = CycleState(system, evo, settings, history, vals[0], F)
