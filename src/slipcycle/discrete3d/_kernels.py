@@ -200,11 +200,12 @@ def lu_solve(lu, piv, b):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _elim_step(R, ns, m, lu, piv, W, KSP, phi, nvec, fS, y):  # pragma: no cover
-    """The Newton step (m,) of the condensed system (the separated rows eliminated:
-    ``StepSolver._separated_block``); ``y`` = K_PP⁻¹ R_P, used while R_P ≠ 0 (before
-    the first step: the separated rows are linear and solved exactly by it); an empty
-    ``y``: R_P is within the Newton tolerance and is left as it is."""
+def _elim_step(R, ns, m, lu, piv, KSP, phi, nvec, fS, y):  # pragma: no cover
+    """The slip part dS (2 ns,) of the Newton step of the condensed system (the separated
+    rows eliminated: ``StepSolver._separated_block``), and whether ``y`` = K_PP⁻¹ R_P
+    enters it: it does while R_P ≠ 0 (before the first step: the separated rows are
+    linear and solved exactly by it); an empty ``y``: R_P is within the Newton tolerance
+    and is left as it is. The separated unknowns follow as dP = −W dS (− y)."""
     s = 2 * ns
     rhs = -R[:s]
     ry = False
@@ -220,25 +221,66 @@ def _elim_step(R, ns, m, lu, piv, W, KSP, phi, nvec, fS, y):  # pragma: no cover
                            - fS[i] * z[s + i] * nvec[i, 0])
             rhs[2 * i + 1] += (z2 - phi[i, 1, 0] * z1 - phi[i, 1, 1] * z2
                                - fS[i] * z[s + i] * nvec[i, 1])
-    dS = lu_solve(lu, piv, rhs)
-    delta = np.empty(m)
-    delta[:s] = dS
-    delta[s:] = -np.dot(W, dS)
+    return lu_solve(lu, piv, rhs), ry
+
+
+@njit(cache=True, nogil=True)
+def _elim_update(xU, rV, D, dS, ry, ns, npp, W, Kt, KSP, y, ya):  # pragma: no cover
+    """Apply the condensed step: x_S += dS; the reactions of the slip rows (tangential,
+    then normal) change by K̃ dS − K_{VS,P} y (K̃ = K_{VS,S} − K_{VS,P} W: the
+    separated unknowns follow the step, dP = −W dS − y), those of the separated rows
+    become zero; of the separated unknowns only the normal separations are followed
+    (the closing test of :func:`active_residual`), the rest is :func:`_elim_finish`'s.
+    O((3 ns + npp) 2 ns) per step instead of O(m²): W and K_{VS,P} are not touched
+    after the first step."""
+    s = 2 * ns
+    m = s + 3 * npp
+    for k in range(s):
+        D[k] += dS[k]
+        xU[k] += dS[k]
+    u = np.dot(Kt, dS)
     if ry:
-        delta[s:] -= y
-    return delta
+        u -= np.dot(KSP, y)
+        ya[0] = 1
+    for k in range(s):
+        rV[k] += u[k]
+    for i in range(ns):
+        rV[m + i] += u[s + i]
+    for k in range(s, m):
+        rV[k] = 0.0
+    for i in range(npp):
+        k = 3 * i + 2
+        w = -np.dot(W[k], dS)
+        if ry:
+            w -= y[k]
+        xU[s + k] += w
+
+
+@njit(cache=True, nogil=True)
+def _elim_finish(D, ns, W, y, ya):  # pragma: no cover - compiled
+    """The separated unknowns' change of the round, dP = −W D_S (− y once, if it
+    entered: ``ya``), from the accumulated slip change D_S (the first 2 ns of D)."""
+    s = 2 * ns
+    dP = -np.dot(W, D[:s])
+    if ya[0]:
+        dP -= y
+    for k in range(dP.size):
+        D[s + k] = dP[k]
 
 
 @njit(cache=True, nogil=True)
 def chord_newton(kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, lu, piv, W, KSP,
-                 phi, nvec, y, has_lu, fresh, it, max_iter, res_prev, stepped, force_tol,
-                 chord_rate, R, zs, zsn):  # pragma: no cover - compiled
+                 Kt, phi, nvec, y, ya, has_lu, fresh, it, max_iter, res_prev, stepped,
+                 force_tol, chord_rate, R, zs, zsn):  # pragma: no cover - compiled
     """Newton iterations on the active unknowns with the active set held fixed and one
     factorised Newton matrix (chord steps): the loop of ``StepSolver._local_newton``.
 
     ``kind`` 0: LU factors (``lu``, ``piv``) of the whole active Jacobian; 2: the
-    separated rows eliminated (``W``, ``KSP``, ``y`` = K_PP⁻¹ R_P at the start, and
-    ``lu``/``piv`` of the condensed slip Jacobian with its ``phi``, ``nvec``). The
+    separated rows eliminated (``W``, ``KSP``, ``Kt`` = K̃, ``y`` = K_PP⁻¹ R_P at the
+    start, and ``lu``/``piv`` of the condensed slip Jacobian with its ``phi``,
+    ``nvec``): the steps change only the slip unknowns of D (and the separated
+    nodes' separations in ``xU``), ``ya[0]`` is set once ``y`` has entered, and the
+    caller completes D (:func:`_elim_finish`). The
     iteration stops before a step that needs a new matrix (none yet, or the residual
     fell less than ``chord_rate`` per step): the caller factorises at the current
     iterate and calls again with ``fresh``. Dense products by BLAS (``np.dot``).
@@ -266,9 +308,17 @@ def chord_newton(kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, lu, piv, W,
         fresh = False
         it += 1
         if kind == 2:
-            delta = _elim_step(R, ns, m, lu, piv, W, KSP, phi, nvec, fS, y)
-        else:
-            delta = lu_solve(lu, piv, -R)
+            dS, ry = _elim_step(R, ns, m, lu, piv, KSP, phi, nvec, fS, y)
+            for k in range(s):
+                if not np.isfinite(dS[k]):
+                    return 4, it, res_prev, stepped
+            res_prev = res
+            stepped = True
+            # the separated rows are solved exactly by the step (K_PS dS + K_PP dP =
+            # −R_P): their reactions are zero and the slip rows follow K̃
+            _elim_update(xU, rV, D, dS, ry, ns, npp, W, Kt, KSP, y, ya)
+            continue
+        delta = lu_solve(lu, piv, -R)
         for k in range(m):
             if not np.isfinite(delta[k]):
                 return 4, it, res_prev, stepped
@@ -277,14 +327,7 @@ def chord_newton(kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, lu, piv, W,
         for k in range(m):
             D[k] += delta[k]
             xU[k] += delta[k]
-        if kind == 2:
-            # the slip rows follow K; the separated rows are solved exactly by the step
-            # (K_PS dS + K_PP dP = −R_P), so their reactions are zero
-            rV[:s] += np.dot(KVU[:s], delta)
-            rV[m:] += np.dot(KVU[m:], delta)
-            rV[s:m] = 0.0
-        else:
-            rV += np.dot(KVU, delta)
+        rV += np.dot(KVU, delta)
 
 
 @njit(cache=True, nogil=True)
@@ -472,8 +515,8 @@ def _apply_change(K, U, D, x, r):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def active_newton(kind, K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU, lu, piv,
-                  W, KSP, phi, nvec, y, has_lu, fresh, it, max_iter, res_prev, stepped,
-                  force_tol, chord_rate, R, zs, zsn):  # pragma: no cover - compiled
+                  W, KSP, Kt, phi, nvec, y, ya, has_lu, fresh, it, max_iter, res_prev,
+                  stepped, force_tol, chord_rate, R, zs, zsn):  # pragma: no cover - compiled
     """One round of the Newton iteration on an active set (``StepSolver._local_newton``):
     with ``first`` the active unknowns ``xU`` = x[U] and reactions ``rV`` = r[V] are
     gathered, then :func:`chord_newton` runs; unless it needs a new matrix (status 3) or
@@ -495,8 +538,11 @@ def active_newton(kind, K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU
             rV[k] = r[V[k]]
     v0S = _slip_start(x0, U, ns)
     status, it, res_prev, stepped = chord_newton(
-        kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, lu, piv, W, KSP, phi, nvec, y,
-        has_lu, fresh, it, max_iter, res_prev, stepped, force_tol, chord_rate, R, zs, zsn)
+        kind, xU, rV, D, v0S, fS, rhoS, rhoP, ns, npp, KVU, lu, piv, W, KSP, Kt, phi, nvec,
+        y, ya, has_lu, fresh, it, max_iter, res_prev, stepped, force_tol, chord_rate, R, zs,
+        zsn)
+    if kind == 2 and status <= 2:
+        _elim_finish(D, ns, W, y, ya)
     moved = status <= 2 and _apply_change(K, U, D, x, r)
     return status, it, res_prev, stepped, moved
 
@@ -533,6 +579,7 @@ def slip_rounds(K, x, r, x0, f, rho_t, rho_n, modes, fix_t, fix_n, slip, sep, U,
     no_phi = np.empty((0, 2, 2))
     no_nvec = np.empty((0, 2))
     no_p = np.empty(0)
+    no_ya = np.zeros(1, np.int64)
     v0S = _slip_start(x0, U, ns)
     while True:
         if first:
@@ -543,9 +590,9 @@ def slip_rounds(K, x, r, x0, f, rho_t, rho_n, modes, fix_t, fix_n, slip, sep, U,
                 rV[k] = r[V[k]]
             res_prev, stepped = np.inf, False
         status, it, res_prev, stepped = chord_newton(
-            0, xU, rV, D, v0S, fS, rhoS, no_p, ns, 0, KVU, lu, piv, no_w, no_w, no_phi,
-            no_nvec, no_p, has_lu, fresh, it, max_iter, res_prev, stepped, force_tol,
-            chord_rate, R, zs, zsn)
+            0, xU, rV, D, v0S, fS, rhoS, no_p, ns, 0, KVU, lu, piv, no_w, no_w, no_w,
+            no_phi, no_nvec, no_p, no_ya, has_lu, fresh, it, max_iter, res_prev, stepped,
+            force_tol, chord_rate, R, zs, zsn)
         if status >= 3:
             return status, it, rounds, res_prev, stepped, 0, 0, 0
         moved = _apply_change(K, U, D, x, r)

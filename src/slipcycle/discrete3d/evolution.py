@@ -519,9 +519,10 @@ class StepSolver:
         # separated nodes beside slipping ones: eliminated (:meth:`_separated_block`)
         elim = (self._separated_block(key, KVU, ns, npp)
                 if npp and self.eliminate_separated else None)
-        kind, W, KSP, y = 0, _NO_W, _NO_W, _NO_Y
+        kind, W, KSP, Kt, y = 0, _NO_W, _NO_W, _NO_W, _NO_Y
+        ya = np.zeros(1, np.int64)
         if elim is not None:
-            kind, W, KSP = 2, elim[1], elim[3]
+            kind, W, Kt, KSP = 2, elim[1], elim[2], elim[3]
             rP = r[V[2 * ns:m]]
             if np.max(np.abs(rP)) > self.force_tol:
                 # K_PP⁻¹ R_P of the separated rows, linear: zero after the first step. A
@@ -535,7 +536,7 @@ class StepSolver:
             f_lu, piv, phi, nvec = lu if lu is not None else _NO_FACTORS
             status, it, res_prev, stepped, moved = active_newton(
                 kind, self.K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU, f_lu,
-                piv, W, KSP, phi, nvec, y, lu is not None, fresh, it, self.max_iter,
+                piv, W, KSP, Kt, phi, nvec, y, ya, lu is not None, fresh, it, self.max_iter,
                 res_prev, stepped, self.force_tol, self.chord_rate, R, zs, zsn)
             first = False
             if status == 3:
