@@ -21,7 +21,10 @@ reused (chord steps) over the iterations and the following steps while the resid
 falls at least fourfold per step, so that most steps need no factorisation; the two half
 steps of the step control start from the full step's solution (its midpoint, its end),
 a predictor that leaves the solution unchanged. A step costs O(N m) for the reaction
-update and O(m²) per iteration, plus O(m³) when the active set is new. The rounds and
+update and O(m²) per iteration, plus O(m³) when the active set is new; with the
+separated nodes condensed out (:meth:`StepSolver._separated_block`) an iteration touches
+only the slip unknowns and the separations, O((3 ns + npp) 2 ns), and the separated
+nodes' slips follow once per round. The rounds and
 iterations run compiled (:mod:`~slipcycle.discrete3d._kernels`); Python picks the cached
 block of an active set and factorises new Newton matrices.
 
