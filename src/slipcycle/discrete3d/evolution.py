@@ -94,6 +94,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
@@ -250,6 +251,9 @@ class StepSolver:
         # the chord-step factors change the Newton path (not the solution): few are kept
         self._max_blocks = 8
         self._lus: dict = {}
+        # the nodes condensed out statically while they stay open (:meth:`condense`)
+        self._open: _OpenCondensation | None = None
+        self._condensations: OrderedDict = OrderedDict()
 
     def solve(self, x0: np.ndarray, r0: np.ndarray, drw: np.ndarray,
               guess: tuple | None = None) -> Step | None:
@@ -270,11 +274,64 @@ class StepSolver:
         Step or None
             None if the Newton iteration did not converge within ``max_iter``.
         """
+        if self._open is not None:
+            step = self._open.solve(x0, r0, drw, guess)
+            if step is not None:
+                return step
+            # a condensed node closes (or the condensed step failed): this step and the
+            # rest of the path on the whole system
+            self.stats["open_fallbacks"] = self.stats.get("open_fallbacks", 0) + 1
+            self._open = None
         if guess is not None:
             step = self._newton(x0, guess[0].copy(), guess[1].copy(), drw)
             if step is not None:
                 return step
         return self._newton(x0, x0.copy(), r0 + drw, drw)
+
+    #: fewest nodes worth a static condensation (:meth:`condense`): below ~100 open
+    #: nodes (300 unknowns) a separated block factorises in about a millisecond and the
+    #: condensed solver's cold caches cost more than it saves (203-node lap joint:
+    #: 70 open nodes, 17.8 s whole, 22.4 s condensed)
+    condense_min_nodes = 100
+
+    def condense(self, nodes: np.ndarray | None) -> None:
+        """Solve the following steps with the nodes ``nodes`` (N_o,) condensed out
+        statically, or on the whole system (None, or fewer than
+        :attr:`condense_min_nodes`).
+
+        An open node carries no reaction: its three rows are linear, K_OC Δx_C +
+        K_OO Δx_O + Δr^w_O = 0, so while the nodes stay open the step is the same
+        incremental problem on the other nodes with the stiffness
+        K* = K_CC − K_CO K_OO⁻¹ K_OC and the load increment Δr^w_C − K_CO K_OO⁻¹ Δr^w_O
+        (static condensation), and Δx_O follows. The per-active-set work of the Newton
+        iteration (the separated block, :meth:`_separated_block`, factorised for every
+        new separated set) then covers only the nodes that open and close. A step whose
+        end leaves a condensed node closed (p_j − ρ_n w_j > 0) is solved again on the
+        whole system, and so is the rest of the path. The condensed K* (and its
+        caches) is kept for the two latest node sets.
+        """
+        if nodes is None or len(nodes) < self.condense_min_nodes:
+            self._open = None
+            return
+        nodes = np.asarray(nodes, np.int64)
+        key = nodes.tobytes()
+        cond = self._condensations.get(key)
+        if cond is None:
+            cond = _OpenCondensation(self, nodes)
+            if len(self._condensations) >= 2:
+                self._condensations.popitem(last=False)
+            self._condensations[key] = cond
+        self._open = cond
+
+    def chord_state(self):
+        """The kept chord-step factors (of the condensed solver too), to restore."""
+        sub = None if self._open is None else dict(self._open.solver._lus)
+        return dict(self._lus), sub
+
+    def restore_chords(self, state) -> None:
+        self._lus = state[0]
+        if self._open is not None and state[1] is not None:
+            self._open.solver._lus = state[1]
 
     def _newton(self, x0, x, r, drw) -> Step | None:
         """The semismooth Newton iteration from the iterate (x, r) (both modified)."""
@@ -585,6 +642,69 @@ class StepSolver:
             rV += KVU @ delta
 
 
+class _OpenCondensation:
+    """A set of open nodes condensed out of the incremental problem
+    (:meth:`StepSolver.condense`): the condensed solver, and the maps back.
+
+    Parameters
+    ----------
+    parent : StepSolver
+    nodes : (N_o,) int array
+        The condensed nodes, ascending.
+    """
+
+    def __init__(self, parent: StepSolver, nodes: np.ndarray):
+        n = parent.n
+        self.parent = parent
+        self.nodes = nodes
+        kept = np.setdiff1d(np.arange(n), nodes)
+        self.kept = kept
+        # dofs in the layout [t1 t2 of each node, then n of each node]
+        self.c = np.concatenate([parent._rows_q[kept].ravel(), 2 * n + kept])
+        self.o = np.concatenate([parent._rows_q[nodes].ravel(), 2 * n + nodes])
+        K = parent.K
+        cho = cho_factor(K[np.ix_(self.o, self.o)], lower=True, check_finite=False)
+        KOC = K[np.ix_(self.o, self.c)]
+        # T = K_OO⁻¹ K_OC: Δx_O = −K_OO⁻¹ Δr^w_O − T Δx_C
+        self.cho, self.T = cho, cho_solve(cho, KOC, check_finite=False)
+        Ks = K[np.ix_(self.c, self.c)] - KOC.T @ self.T
+        Ks = 0.5 * (Ks + Ks.T)
+        nc = kept.size
+        sub = SimpleNamespace(n_nodes=nc, K=Ks, friction=parent.f[kept],
+                              A=Ks[:2 * nc, :2 * nc], C=Ks[2 * nc:, 2 * nc:])
+        solver = StepSolver(sub, 1.0, max_iter=parent.max_iter)
+        # the whole system's tolerance and augmentation parameters: the same Newton path
+        solver.force_tol = parent.force_tol
+        solver.rho_t, solver.rho_n = parent.rho_t[kept], parent.rho_n[kept]
+        solver.stats = parent.stats
+        self.solver = solver
+        self.rho_o = parent.rho_n[nodes]
+
+    def solve(self, x0, r0, drw, guess):
+        """The step on the condensed system, mapped back to the whole one; None if it
+        failed or leaves a condensed node closed."""
+        c, o = self.c, self.o
+        g = cho_solve(self.cho, drw[o], check_finite=False)
+        drw_c = drw[c] - self.T.T @ drw[o]
+        step = self.solver.solve(x0[c], r0[c], drw_c,
+                                 None if guess is None else (guess[0][c], guess[1][c]))
+        if step is None:
+            return None
+        n, m = self.parent.n, self.nodes.size
+        dx_o = -g - self.T @ (step.x - x0[c])
+        w = x0[o[2 * m:]] + dx_o[2 * m:]
+        # p_j − ρ_n w_j ≤ 0: each condensed node stays open (classify_nodes' test)
+        if np.any(r0[o[2 * m:]] - self.rho_o * w > 0.0):
+            return None
+        self.parent.stats["condensed_steps"] = self.parent.stats.get("condensed_steps", 0) + 1
+        x, r = x0.copy(), r0.copy()
+        x[c], r[c] = step.x, step.r
+        x[o] += dx_o
+        modes = np.full(n, SEPARATED, np.int8)
+        modes[self.kept] = step.modes
+        return Step(x, r, modes, drw, step.iterations)
+
+
 # placeholders of the arrays chord_newton does not read for a kind of active set (typed
 # as the real ones, so that one compiled version serves)
 _NO_LU = np.empty((0, 0), order="F")
@@ -645,6 +765,8 @@ class PathTotals3D:
     #: (fraction start, fraction end, depth, kind, node states at the step ends)
     plan: list = field(default_factory=list)
     replay_mismatches: int = 0
+    #: (N,) bool: node j was closed at the start or at some step end of the path
+    closed: np.ndarray = None
 
     @classmethod
     def zeros(cls, n: int) -> PathTotals3D:
@@ -691,6 +813,9 @@ class Evolution3D:
 
     #: an event function (:meth:`_event_values`) at a located event, relative to the force scale
     event_tol = 1e-11
+    #: condense the nodes open over the whole last path out of the next one
+    #: (:meth:`StepSolver.condense`; False: every step on the whole system)
+    condense_open = True
     #: secant iterations of one event location at most
     event_iterations = 40
     #: an event within this fraction of a load interval from a step's end is taken
@@ -725,6 +850,7 @@ class Evolution3D:
         #: while replaying, also solve the full steps and check the error estimates
         self.check_plan = False
         self._leaves: list = []
+        self._always_open: np.ndarray | None = None
 
     def resync(self) -> None:
         """Recompute r = r^w + K x exactly (removes round-off drift of the updates)."""
@@ -742,6 +868,7 @@ class Evolution3D:
             t.normal_work += normal_work
             t.all_slip_or_separated |= none_stuck
             t.steps += 1
+            t.closed |= step.modes != SEPARATED
         if self.step_log is not None:
             self.step_log.append((step.x.copy(), step.r.copy(), step.modes.copy(), x0.copy()))
         self.x, self.r, self.modes = step.x, step.r, step.modes
@@ -1040,9 +1167,9 @@ class Evolution3D:
             # the Newton matrices kept for the chord steps are restored after this
             # extra solve: the converged steps depend on them within the Newton
             # tolerance, and a check must not perturb the replayed map
-            lus = dict(self.solver._lus)
+            lus = self.solver.chord_state()
             full = self._solve(x0, r0, rwb - rwa)
-            self.solver._lus = lus
+            self.solver.restore_chords(lus)
             if full is None:
                 return False
         if check and not self._accept(x0, r0, full, h1, h2, kind == "X")[0]:
@@ -1084,6 +1211,9 @@ class Evolution3D:
         """
         n = self.n
         t = self._totals = PathTotals3D.zeros(n)
+        t.closed = self.modes != SEPARATED
+        # the nodes open over the whole last path are condensed out while they stay open
+        self.solver.condense(self._always_open if self.condense_open else None)
         if record:
             xs = [self.x.copy()]
             rs = [self.r.copy()]
@@ -1115,4 +1245,6 @@ class Evolution3D:
         if record:
             t.samples = {"x": np.array(xs), "r": np.array(rs), "modes": np.array(ms)}
         self._totals = None
+        self.solver.condense(None)
+        self._always_open = np.flatnonzero(~t.closed)
         return t
