@@ -665,9 +665,11 @@ class _OpenCondensation:
         K = parent.K
         cho = cho_factor(K[np.ix_(self.o, self.o)], lower=True, check_finite=False)
         KOC = K[np.ix_(self.o, self.c)]
-        # T = K_OO⁻¹ K_OC: Δx_O = −K_OO⁻¹ Δr^w_O − T Δx_C
-        self.cho, self.T = cho, cho_solve(cho, KOC, check_finite=False)
-        Ks = K[np.ix_(self.c, self.c)] - KOC.T @ self.T
+        # T = K_OO⁻¹ K_OC: Δx_O = −K_OO⁻¹ Δr^w_O − T Δx_C; kept transposed (c, o), so
+        # that the rows of the unknowns a step changed are contiguous
+        T = cho_solve(cho, KOC, check_finite=False)
+        self.cho, self.Tt = cho, np.ascontiguousarray(T.T)
+        Ks = K[np.ix_(self.c, self.c)] - KOC.T @ T
         Ks = 0.5 * (Ks + Ks.T)
         nc = kept.size
         sub = SimpleNamespace(n_nodes=nc, K=Ks, friction=parent.f[kept],
@@ -685,13 +687,14 @@ class _OpenCondensation:
         failed or leaves a condensed node closed."""
         c, o = self.c, self.o
         g = cho_solve(self.cho, drw[o], check_finite=False)
-        drw_c = drw[c] - self.T.T @ drw[o]
-        step = self.solver.solve(x0[c], r0[c], drw_c,
+        step = self.solver.solve(x0[c], r0[c], drw[c] - self.Tt @ drw[o],
                                  None if guess is None else (guess[0][c], guess[1][c]))
         if step is None:
             return None
         n, m = self.parent.n, self.nodes.size
-        dx_o = -g - self.T @ (step.x - x0[c])
+        dx = step.x - x0[c]
+        nz = np.flatnonzero(dx)
+        dx_o = -g - dx[nz] @ self.Tt[nz]
         w = x0[o[2 * m:]] + dx_o[2 * m:]
         # p_j − ρ_n w_j ≤ 0: each condensed node stays open (classify_nodes' test)
         if np.any(r0[o[2 * m:]] - self.rho_o * w > 0.0):
