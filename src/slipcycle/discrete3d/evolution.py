@@ -748,6 +748,9 @@ class PathTotals3D:
         be passed as :attr:`Evolution3D.plan` to solve the same subdivision again.
     replay_mismatches : int
         Recorded sub-steps that did not fit the path when replayed (redone adaptively).
+    closed : (N,) bool array
+        Node j was closed at the start or at some step end (the others stayed open over
+        the whole path and are condensed out of the next one, :meth:`StepSolver.condense`).
     samples : dict
         ``x``, ``r`` ((n+1, 3N)) and ``modes`` ((n+1, N)) at the load samples (if recorded).
     """
@@ -768,7 +771,6 @@ class PathTotals3D:
     #: (fraction start, fraction end, depth, kind, node states at the step ends)
     plan: list = field(default_factory=list)
     replay_mismatches: int = 0
-    #: (N,) bool: node j was closed at the start or at some step end of the path
     closed: np.ndarray = None
 
     @classmethod
