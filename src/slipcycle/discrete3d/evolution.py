@@ -654,8 +654,7 @@ class _OpenCondensation:
     """
 
     def __init__(self, parent: StepSolver, nodes: np.ndarray):
-        n = parent.n
-        self.parent = parent
+        n = self.n = parent.n
         self.nodes = nodes
         kept = np.setdiff1d(np.arange(n), nodes)
         self.kept = kept
@@ -691,7 +690,7 @@ class _OpenCondensation:
                                  None if guess is None else (guess[0][c], guess[1][c]))
         if step is None:
             return None
-        n, m = self.parent.n, self.nodes.size
+        n, m = self.n, self.nodes.size
         dx = step.x - x0[c]
         nz = np.flatnonzero(dx)
         dx_o = -g - dx[nz] @ self.Tt[nz]
@@ -699,7 +698,8 @@ class _OpenCondensation:
         # p_j − ρ_n w_j ≤ 0: each condensed node stays open (classify_nodes' test)
         if np.any(r0[o[2 * m:]] - self.rho_o * w > 0.0):
             return None
-        self.parent.stats["condensed_steps"] = self.parent.stats.get("condensed_steps", 0) + 1
+        stats = self.solver.stats                   # the parent's (shared)
+        stats["condensed_steps"] = stats.get("condensed_steps", 0) + 1
         x, r = x0.copy(), r0.copy()
         x[c], r[c] = step.x, step.r
         x[o] += dx_o
