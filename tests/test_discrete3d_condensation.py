@@ -151,10 +151,11 @@ def test_open_nodes_condensed_statically_give_the_steps_of_the_whole_system(seed
         x, r = b.x, b.r
 
 
-def test_a_condensed_node_that_closes_sends_the_step_to_the_whole_system():
+def test_a_condensed_node_that_closes_is_kept_in_the_step_and_after_it():
     """A condensed node pressed shut by the step: the condensed step is refused (its
-    p − ρ_n w > 0 at the end), the step is solved on the whole system (the same result
-    as without condensation) and so is the rest of the path."""
+    p − ρ_n w > 0 at the end), the step is solved again with that node kept (the other
+    open nodes condensed: the same result as without condensation), and the following
+    steps keep it too."""
     rng = np.random.default_rng(7)
     n = 12
     system = _system(rng, n)
@@ -168,7 +169,9 @@ def test_a_condensed_node_that_closes_sends_the_step_to_the_whole_system():
     solver.condense(open_nodes)
     step = solver.solve(x0, r0, drw)
     assert whole.modes[j] != SEPARATED
-    assert solver.stats["open_fallbacks"] == 1 and solver._open is None
+    assert solver.stats["open_fallbacks"] == 1
+    assert set(solver._open.nodes) == set(open_nodes) - {j}
+    assert solver.stats["condensed_steps"] == 1
     assert np.array_equal(step.modes, whole.modes)
     assert np.max(np.abs(step.x - whole.x)) <= 1e-9 * np.max(np.abs(whole.x))
 
@@ -176,9 +179,13 @@ def test_a_condensed_node_that_closes_sends_the_step_to_the_whole_system():
 def test_a_lap_joint_run_with_its_open_nodes_condensed_gives_the_same_study(monkeypatch):
     """`slipcycle.run` of the shipped lap joint on its unrefined mesh (203 nodes, 70 of
     them open over every steady cycle; the condensation forced on below its size
-    threshold): the cycles after the first run condensed, and every protocol's
-    dissipation, cycle count and stuck area equal those of the run without it (within
-    1e-9: the Newton tolerance)."""
+    threshold): the assembly and the first cycle condensed per load interval, the later
+    cycles over the whole cycle, and every protocol's cycle count and stuck area equal
+    those of the run without it, its dissipation within the step control's tolerance
+    (1e-4). The condensed steps equal the whole system's within the Newton tolerance
+    (the tests above), which moves the instants at which the event location stops (it
+    locates an event only as closely as the step control needs): 3.2e-6 relative in D
+    of the sequential protocol, measured."""
     import slipcycle
     from slipcycle.discrete3d import evolution
     from slipcycle.examples import example_path
@@ -203,7 +210,84 @@ def test_a_lap_joint_run_with_its_open_nodes_condensed_gives_the_same_study(monk
     assert len(used) > 1000 and min(used) >= 16
     whole, condensed = summaries
     np.testing.assert_allclose(condensed["protocol_dissipation_per_cycle"],
-                               whole["protocol_dissipation_per_cycle"], rtol=1e-9)
+                               whole["protocol_dissipation_per_cycle"], rtol=1e-4)
     assert condensed["protocol_cycles_run"] == whole["protocol_cycles_run"]
     np.testing.assert_allclose(condensed["protocol_stuck_area"],
                                whole["protocol_stuck_area"], rtol=1e-9)
+
+
+def _follow(system, x0, r_w0, vals, condense, span=True, monkeypatch=None):
+    """The states at the samples and every committed step of a path of fixed steps
+    (one per load interval, no event location), with or without the open nodes
+    condensed per load interval."""
+    from slipcycle.discrete3d.evolution import Evolution3D, _OpenCondensation
+
+    evo = Evolution3D(system, x0, r_w0, 1.0, adaptive=False)
+    evo.locate_events = False
+    evo.condense_open = condense
+    evo.solver.condense_min_nodes = 1
+    evo.solver.force_tol = 1e-11
+    if not span:
+        monkeypatch.setattr(_OpenCondensation, "max_span", 0)
+    evo.step_log = []
+    samples = evo.follow(np.zeros(len(vals)), vals, record=True).samples
+    return samples, evo.step_log, dict(evo.solver.stats)
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2 ** 31), n=st.integers(4, 14), span=st.booleans())
+def test_a_path_condensed_per_load_interval_equals_the_whole_systems(seed, n, span):
+    """A path along which open nodes close and others open (a tangential load with a
+    normal load of changing sign), followed with the nodes open at each interval's
+    start and at the end of its whole step condensed out (a node that closes in a step
+    kept in it and after it), gives every step of the path on the whole system: the same
+    node states, the states within the Newton tolerance. ``span``: the open nodes' load
+    maps taken on the basis of the interval's load increment or computed per step."""
+    import pytest
+    rng = np.random.default_rng(seed)
+    system = _system(rng, n)
+    x0, r0, drw = _step_state(rng, n)
+    r_w0 = r0 - system.K @ x0
+    normal = np.zeros(3 * n)
+    normal[2 * n:] = rng.normal(size=n)
+    t = np.linspace(0.0, 1.0, 9)
+    vals = r_w0 + np.outer(t, drw) + np.outer(np.sin(2 * np.pi * t), 0.5 * normal)
+    with pytest.MonkeyPatch.context() as mp:
+        whole = _follow(system, x0, r_w0, vals, False)
+        cond = _follow(system, x0, r_w0, vals, True, span, mp)
+    assume(cond[2].get("condensed_steps", 0) > 0)
+    scale = np.max(np.abs(np.diag(system.K)))
+    assert len(whole[1]) == len(cond[1])
+    for a, b in zip(whole[1], cond[1], strict=True):
+        assert np.array_equal(a[2], b[2])
+        assert np.max(np.abs(a[0] - b[0])) <= 1e3 * 1e-11 / scale * n
+    np.testing.assert_array_equal(whole[0]["modes"], cond[0]["modes"])
+
+
+def test_the_load_maps_of_a_path_span_its_increments_only():
+    """The open nodes' load maps kept for a path (:meth:`_OpenCondensation.span`): a
+    cycle's increments (multiples of one load vector plus round-off) are mapped through
+    the basis, equal to the direct maps K_OO⁻¹ Δr^w_O, Tᵀ Δr^w_O within round-off; an
+    increment outside the span is mapped directly (exactly)."""
+    rng = np.random.default_rng(3)
+    n = 10
+    system = _system(rng, n)
+    x0, r0, drw = _step_state(rng, n)
+    solver = StepSolver(system, 1.0)
+    solver.condense_min_nodes = 1
+    base = rng.normal(size=3 * n)
+    vals = base + np.outer(np.sin(np.linspace(0, 2 * np.pi, 21)), drw)
+    solver.condense(np.flatnonzero(x0[2 * n:] > 0), vals)
+    cond = solver._open
+    assert cond._span[0].shape[0] == 1                   # one direction
+    o = cond.o
+    for a, b in [(3, 4), (7, 12), (0, 5)]:
+        d = (vals[b] - vals[a])[o]
+        g, h = cond._maps(d)
+        from scipy.linalg import cho_solve
+        g_direct = cho_solve(cond.cho, d)
+        np.testing.assert_allclose(g, g_direct, atol=1e-12 * np.max(np.abs(g_direct)))
+        np.testing.assert_allclose(h, cond.Tt @ d, atol=1e-12 * np.max(np.abs(h)))
+    other = rng.normal(size=o.size)
+    g, h = cond._maps(other)
+    np.testing.assert_array_equal(g, cho_solve(cond.cho, other, check_finite=False))
