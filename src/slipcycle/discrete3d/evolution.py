@@ -321,9 +321,11 @@ class StepSolver:
         (static condensation), and Δx_O follows. The per-active-set work of the Newton
         iteration (the separated block, :meth:`_separated_block`, factorised for every
         new separated set) then covers only the nodes that open and close. A step whose
-        end leaves a condensed node closed (p_j − ρ_n w_j > 0) is solved again on the
-        whole system, and so is the rest of the path. The condensed K* (and its
-        caches) is kept for the two latest node sets.
+        end leaves condensed nodes closed (p_j − ρ_n w_j > 0) is solved again with those
+        nodes kept (the others condensed: a condensation of fewer nodes, used by the
+        following steps too); a step whose condensed Newton iteration fails, on the
+        whole system. The condensed K* (and its caches) is kept for the two latest node
+        sets.
         """
         self._loads = loads
         if nodes is None or len(nodes) < self.condense_min_nodes:
@@ -886,8 +888,9 @@ class Evolution3D:
 
     #: an event function (:meth:`_event_values`) at a located event, relative to the force scale
     event_tol = 1e-11
-    #: condense the nodes open over the whole last path out of the next one
-    #: (:meth:`StepSolver.condense`; False: every step on the whole system)
+    #: condense the nodes open over the whole last path out of the next one, else those
+    #: open over a load interval out of it (:meth:`StepSolver.condense`,
+    #: :meth:`_condense_interval`; False: every step on the whole system)
     condense_open = True
     #: secant iterations of one event location at most
     event_iterations = 40
