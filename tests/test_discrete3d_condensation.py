@@ -291,3 +291,25 @@ def test_the_load_maps_of_a_path_span_its_increments_only():
     other = rng.normal(size=o.size)
     g, h = cond._maps(other)
     np.testing.assert_array_equal(g, cho_solve(cond.cho, other, check_finite=False))
+
+
+def test_without_a_recondensation_left_a_closing_node_sends_the_path_to_the_whole_system():
+    """``recondense_max`` spent: the step that closes a condensed node and the following
+    ones are solved on the whole system (the same result as without condensation)."""
+    rng = np.random.default_rng(7)
+    n = 12
+    system = _system(rng, n)
+    x0, r0, drw = _step_state(rng, n)
+    open_nodes = np.flatnonzero(x0[2 * n:] > 0)
+    j = open_nodes[0]
+    drw[2 * n + j] = 10.0 * system.K[2 * n + j, 2 * n + j] * x0[2 * n + j]   # closes j
+    whole = StepSolver(system, 1.0).solve(x0, r0, drw)
+    solver = StepSolver(system, 1.0)
+    solver.condense_min_nodes = 1
+    solver.recondense_max = 0
+    solver.condense(open_nodes)
+    step = solver.solve(x0, r0, drw)
+    assert solver.stats["open_fallbacks"] == 1 and not solver.condensing
+    assert "condensed_steps" not in solver.stats
+    assert np.array_equal(step.modes, whole.modes)
+    assert np.max(np.abs(step.x - whole.x)) <= 1e-9 * np.max(np.abs(whole.x))

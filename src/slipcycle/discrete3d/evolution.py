@@ -254,6 +254,7 @@ class StepSolver:
         # the nodes condensed out statically while they stay open (:meth:`condense`)
         self._open: _OpenCondensation | None = None
         self._loads: np.ndarray | None = None
+        self._recondense_left = self.recondense_max
         self._condensations: OrderedDict = OrderedDict()
 
     def solve(self, x0: np.ndarray, r0: np.ndarray, drw: np.ndarray,
@@ -282,9 +283,12 @@ class StepSolver:
                 return step
             if closing is None:
                 break
-            # condensed nodes close in the step: the step again with them kept
+            # condensed nodes close in the step: the step again with them kept (at most
+            # recondense_max times per condensation from outside, then the whole system)
             self.stats["open_fallbacks"] = self.stats.get("open_fallbacks", 0) + 1
-            self.condense(cond.nodes[~closing], self._loads)
+            budget = self._recondense_left - 1
+            self.condense(cond.nodes[~closing] if budget >= 0 else None, self._loads)
+            self._recondense_left = budget
             cond = self._open
         # the condensed Newton iteration failed: this step on the whole system; if that
         # fails too, the caller shortens the step, which may be solved condensed again
@@ -306,6 +310,11 @@ class StepSolver:
     #: condensed solver's cold caches cost more than it saves (203-node lap joint:
     #: 70 open nodes, 17.8 s whole, 22.4 s condensed)
     condense_min_nodes = 100
+    #: condensations of fewer nodes after condensed nodes closed (:meth:`solve`), per
+    #: condensation set from outside (a path, a load interval): each costs about as
+    #: much as a few steps on the whole system (751-node lap joint: 7 in its first
+    #: cycle, 2 in its assembly)
+    recondense_max = 32
 
     def condense(self, nodes: np.ndarray | None, loads: np.ndarray | None = None) -> None:
         """Solve the following steps with the nodes ``nodes`` (N_o,) condensed out
@@ -328,6 +337,7 @@ class StepSolver:
         sets.
         """
         self._loads = loads
+        self._recondense_left = self.recondense_max
         if nodes is None or len(nodes) < self.condense_min_nodes:
             self._open = None
             return
