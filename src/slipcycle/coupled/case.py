@@ -25,7 +25,7 @@ from slipcycle.io.loads import protocol_states
 from slipcycle.result import STEADY_MESSAGES, STEADY_STATES, RunResult, SteadyState
 
 __all__ = ["CoupledResult", "SHARED_UNITS", "SHARED_FLAGS", "solve", "finite_or_none",
-           "read_start"]
+           "read_start", "certificate_entries"]
 
 #: unit of every numeric summary entry shared by the discrete models (node indices,
 #: counts, flags and ratios: "1")
@@ -144,7 +144,7 @@ class CoupledResult(RunResult):
             "friction_max": fmax,
             "well_posed": bool(fmax < fc.f_crit),
             "wall_time_s": self.wall_time_s,
-            **_certificate_entries(res.certificate),
+            **certificate_entries(res.certificate),
         }
 
     def own_summary(self) -> dict:
@@ -158,7 +158,7 @@ class CoupledResult(RunResult):
                 "units": dict(self.SUMMARY_UNITS)}
 
 
-def _certificate_entries(cert) -> dict:
+def certificate_entries(cert) -> dict:
     """The summary entries of a run's certificate
     (:class:`~slipcycle.coupled.driver.Certificate`; None where the solution has none)."""
     if cert is None:

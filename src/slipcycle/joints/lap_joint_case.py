@@ -25,7 +25,9 @@ meshes of ``[lap_joint.convergence]``, and runs the study
   removes j refinements, so the meshes are nested: :func:`coarser_joint`), ``rtol``;
 - ``[run]``: ``cycles``, ``steps_per_cycle``, ``steady_tol``, ``min_cycles``,
   ``step_tolerance``, ``replay`` (freeze the step subdivision once the slip pattern
-  repeats, :func:`~slipcycle.discrete3d.steady.simulate3d`), ``difference_tol``;
+  repeats, :func:`~slipcycle.discrete3d.steady.simulate3d`), ``accelerate`` (the
+  accelerated steady state with its certificate, reported per protocol; default false:
+  plain cycling), ``difference_tol``;
 - ``[output]``: ``fields`` (``["xdmf"]``, ``["xdmf", "pvd"]`` or ``[]``).
 """
 
@@ -302,7 +304,8 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
            "tol": read_steady_tol(rn, 1e-8),
            "min_cycles": rn.int("min_cycles", 1, ge=1),
            "step_tol": step_tolerance(rn, default=1e-4),
-           "replay": rn.bool("replay", False)}
+           "replay": rn.bool("replay", False),
+           "accelerate": rn.bool("accelerate", False)}
     difference_tol = rn.float("difference_tol", 1e-3, gt=0.0, lt=1.0)
     out = case.section("output", required=False)
     fields = out.raw("fields", ["xdmf"])

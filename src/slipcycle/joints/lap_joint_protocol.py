@@ -300,8 +300,10 @@ class StudySettings:
     friction : float
         Coulomb coefficient f of the interface.
     run : dict
-        ``cycles``, ``steps_per_cycle``, ``tol``, ``min_cycles``, ``step_tol`` of the
-        3-D engine (:data:`slipcycle.discrete3d.case.RUN_DEFAULTS` for the others).
+        ``cycles``, ``steps_per_cycle``, ``tol``, ``min_cycles``, ``step_tol``,
+        ``replay``, ``accelerate`` of the 3-D engine
+        (:data:`slipcycle.discrete3d.case.RUN_DEFAULTS` for the others; ``accelerate``
+        False: plain cycling).
     difference_tol : float
         Relative spread of the protocols' dissipation above which the orders are said to
         differ.
@@ -330,10 +332,11 @@ class StudySettings:
         F = self.service_amplitude
         if not (isinstance(F, int | float) and np.isfinite(F) and F >= 0):
             raise InputError("service_amplitude", f"must be ≥ 0 N, got {F!r}")
-        unknown = set(self.run) - set(RUN_DEFAULTS)
+        known = [*RUN_DEFAULTS, "accelerate"]
+        unknown = set(self.run) - set(known)
         if unknown:
             raise InputError("run", f"unknown run setting {sorted(unknown)[0]!r} (known: "
-                             f"{', '.join(RUN_DEFAULTS)})")
+                             f"{', '.join(known)})")
         object.__setattr__(self, "run", {**RUN_DEFAULTS, **self.run})
 
 

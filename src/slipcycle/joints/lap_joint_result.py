@@ -18,6 +18,8 @@ from typing import Any, ClassVar
 import numpy as np
 import xarray as xr
 
+from slipcycle.coupled.case import certificate_entries
+from slipcycle.coupled.driver import ACCELERATIONS
 from slipcycle.joints.convergence import mesh_convergence
 from slipcycle.joints.lap_joint_protocol import JointContact, StudySettings
 from slipcycle.joints.lap_joint_report import report_markdown
@@ -83,7 +85,8 @@ SUMMARY_UNITS = {
     "protocol_bolt_force_max": "N",
     "protocol_slipping_nodes": "1", "protocol_separating_nodes": "1",
     "protocol_cycles_run": "1", "protocol_residual": "1", "protocol_converged": "1",
-    "protocol_energy_balance_error": "1",
+    "protocol_energy_balance_error": "1", "protocol_certified_residual": "1",
+    "protocol_memory_distance": "1", "protocol_dissipation_distance": "1",
     "dissipation_spread": "1", "dissipation_min": "J", "dissipation_max": "J",
     "orders_differ": "1", "difference_tol": "1", "mesh_spacing": "m",
     "mesh_dissipation": "J", "protocol_dissipation_extrapolated": "J",
@@ -94,7 +97,8 @@ SUMMARY_UNITS = {
 
 #: every word of the categorical summary entries
 SUMMARY_FLAGS = {"steady_state": STEADY_STATES, "steady_state_class": STEADY_STATES,
-                 "protocol_steady_state": STEADY_STATES}
+                 "protocol_steady_state": STEADY_STATES,
+                 "protocol_acceleration": ACCELERATIONS}
 
 
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
@@ -276,6 +280,11 @@ class LapJointResult(RunResult):
             "protocol_converged": [bool(r.converged) for r in self.runs],
             "protocol_energy_balance_error": [r.solution.energy_balance_error
                                               for r in self.runs],
+            # the accelerated steady state's certificate per protocol ("none": plain)
+            **{f"protocol_{k}": [certificate_entries(r.solution.certificate)[k]
+                                 for r in self.runs]
+               for k in ("acceleration", "certified_residual", "memory_distance",
+                         "dissipation_distance")},
             "dissipation_min": float(self.dissipation.min()),
             "dissipation_max": float(self.dissipation.max()),
             "dissipation_spread": self.dissipation_spread,
