@@ -219,6 +219,7 @@ def test_cli_writes_report_figures_and_fields_per_protocol(small_cli):
     numeric = [k for k, v in summary.items()
                if isinstance(v, int | float | list) and not isinstance(v, bool)
                and k not in ("protocols", "protocol_orders", "protocol_steady_state",
+                             "protocol_acceleration",
                              "mesh_convergence_messages")]
     assert [k for k in numeric if k not in summary["units"]] == []
     with xr.open_dataset(small_cli / "result.nc") as ds:
