@@ -151,21 +151,27 @@ def test_open_nodes_condensed_statically_give_the_steps_of_the_whole_system(seed
         x, r = b.x, b.r
 
 
+def _closing_step(n=12):
+    """A step that presses the first open node j shut, its solution on the whole system,
+    and a solver that condenses any number of open nodes."""
+    rng = np.random.default_rng(7)
+    system = _system(rng, n)
+    x0, r0, drw = _step_state(rng, n)
+    open_nodes = np.flatnonzero(x0[2 * n:] > 0)
+    j = open_nodes[0]
+    drw[2 * n + j] = 10.0 * system.K[2 * n + j, 2 * n + j] * x0[2 * n + j]
+    whole = StepSolver(system, 1.0).solve(x0, r0, drw)
+    solver = StepSolver(system, 1.0)
+    solver.condense_min_nodes = 1
+    return solver, (x0, r0, drw), open_nodes, j, whole
+
+
 def test_a_condensed_node_that_closes_is_kept_in_the_step_and_after_it():
     """A condensed node pressed shut by the step: the condensed step is refused (its
     p − ρ_n w > 0 at the end), the step is solved again with that node kept (the other
     open nodes condensed: the same result as without condensation), and the following
     steps keep it too."""
-    rng = np.random.default_rng(7)
-    n = 12
-    system = _system(rng, n)
-    x0, r0, drw = _step_state(rng, n)
-    open_nodes = np.flatnonzero(x0[2 * n:] > 0)
-    j = open_nodes[0]
-    drw[2 * n + j] = 10.0 * system.K[2 * n + j, 2 * n + j] * x0[2 * n + j]   # closes j
-    whole = StepSolver(system, 1.0).solve(x0, r0, drw)
-    solver = StepSolver(system, 1.0)
-    solver.condense_min_nodes = 1
+    solver, (x0, r0, drw), open_nodes, j, whole = _closing_step()
     solver.condense(open_nodes)
     step = solver.solve(x0, r0, drw)
     assert whole.modes[j] != SEPARATED
@@ -296,16 +302,7 @@ def test_the_load_maps_of_a_path_span_its_increments_only():
 def test_without_a_recondensation_left_a_closing_node_sends_the_path_to_the_whole_system():
     """``recondense_max`` spent: the step that closes a condensed node and the following
     ones are solved on the whole system (the same result as without condensation)."""
-    rng = np.random.default_rng(7)
-    n = 12
-    system = _system(rng, n)
-    x0, r0, drw = _step_state(rng, n)
-    open_nodes = np.flatnonzero(x0[2 * n:] > 0)
-    j = open_nodes[0]
-    drw[2 * n + j] = 10.0 * system.K[2 * n + j, 2 * n + j] * x0[2 * n + j]   # closes j
-    whole = StepSolver(system, 1.0).solve(x0, r0, drw)
-    solver = StepSolver(system, 1.0)
-    solver.condense_min_nodes = 1
+    solver, (x0, r0, drw), open_nodes, j, whole = _closing_step()
     solver.recondense_max = 0
     solver.condense(open_nodes)
     step = solver.solve(x0, r0, drw)
