@@ -26,11 +26,12 @@ __all__ = ["add_rows", "gather_block", "classify_nodes", "active_residual", "lu_
 
 @njit(cache=True, nogil=True)
 def add_rows(K, rows, coef, out):  # pragma: no cover - compiled
-    """``out += coef @ K[rows]`` in place (K symmetric: the columns K[:, rows] @ coef).
+    """``out += coef @ K[rows]`` in place (K symmetric: the columns K[:, rows] @ coef),
+    without copying the rows.
 
     Parameters
     ----------
-    K : (M, M) C-contiguous float array
+    K : (R, M) C-contiguous float array
     rows : (m,) int array
     coef : (m,) float array
     out : (M,) float array, modified

@@ -772,7 +772,8 @@ class _OpenCondensation:
         n, m = self.n, self.nodes.size
         dx = step.x - x0[c]
         nz = np.flatnonzero(dx)
-        dx_o = -g - dx[nz] @ self.Tt[nz]
+        dx_o = -g
+        add_rows(self.Tt, nz, -dx[nz], dx_o)    # − Tᵀ Δx_C, the rows read in place
         w = x0[o[2 * m:]] + dx_o[2 * m:]
         # p_j − ρ_n w_j ≤ 0: each condensed node stays open (classify_nodes' test)
         closing = r0[o[2 * m:]] - self.rho_o * w > 0.0
