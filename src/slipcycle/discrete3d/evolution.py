@@ -1225,7 +1225,8 @@ class Evolution3D:
         ``rwb`` (3N,) and at the end of its whole step out of the interval's steps
         (:meth:`StepSolver.condense`): such a node rarely closes in between (on the
         751-node lap joint 15 of 5600 node-intervals in the assembly and the first
-        cycle), and one that does makes its step fall back to the whole system.
+        cycle), and one that does is kept in its step and after it
+        (:meth:`StepSolver.solve`).
 
         Returns
         -------
@@ -1340,13 +1341,11 @@ class Evolution3D:
             if plan is not None:
                 self._replay(vals[k], vals[k + 1], plan[k])
                 t.plan.append(self._leaves)
-            elif self.adaptive:
+            elif self.adaptive or self.substeps == 1:
                 full = self._condense_interval(vals[k], vals[k + 1])
                 self._interval(vals[k], vals[k + 1], full, 0)
-                t.plan.append(self._leaves)
-            elif self.substeps == 1:
-                full = self._condense_interval(vals[k], vals[k + 1])
-                self._interval(vals[k], vals[k + 1], full, 0)
+                if self.adaptive:
+                    t.plan.append(self._leaves)
             else:
                 s = np.linspace(0.0, 1.0, self.substeps + 1)
                 for a, b in zip(s[:-1], s[1:], strict=True):
