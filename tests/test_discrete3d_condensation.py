@@ -8,10 +8,12 @@ every row within the Newton tolerance.
 """
 
 import numpy as np
+import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
+from scipy.linalg import cho_solve
 
-from slipcycle.discrete3d.evolution import StepSolver
+from slipcycle.discrete3d.evolution import Evolution3D, StepSolver, _OpenCondensation
 from slipcycle.discrete3d.model import SEPARATED, SLIP, FrictionalSystem3D
 
 
@@ -226,8 +228,6 @@ def _follow(system, x0, r_w0, vals, condense, span=True, monkeypatch=None):
     """The states at the samples and every committed step of a path of fixed steps
     (one per load interval, no event location), with or without the open nodes
     condensed per load interval."""
-    from slipcycle.discrete3d.evolution import Evolution3D, _OpenCondensation
-
     evo = Evolution3D(system, x0, r_w0, 1.0, adaptive=False)
     evo.locate_events = False
     evo.condense_open = condense
@@ -249,7 +249,6 @@ def test_a_path_condensed_per_load_interval_equals_the_whole_systems(seed, n, sp
     kept in it and after it), gives every step of the path on the whole system: the same
     node states, the states within the Newton tolerance. ``span``: the open nodes' load
     maps taken on the basis of the interval's load increment or computed per step."""
-    import pytest
     rng = np.random.default_rng(seed)
     system = _system(rng, n)
     x0, r0, drw = _step_state(rng, n)
@@ -290,7 +289,6 @@ def test_the_load_maps_of_a_path_span_its_increments_only():
     for a, b in [(3, 4), (7, 12), (0, 5)]:
         d = (vals[b] - vals[a])[o]
         g, h = cond._maps(d)
-        from scipy.linalg import cho_solve
         g_direct = cho_solve(cond.cho, d)
         np.testing.assert_allclose(g, g_direct, atol=1e-12 * np.max(np.abs(g_direct)))
         np.testing.assert_allclose(h, cond.Tt @ d, atol=1e-12 * np.max(np.abs(h)))

@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 import slipcycle
+from slipcycle.api import as_case
 from slipcycle.examples import example_path, example_text
+from slipcycle.joints.lap_joint_case import read_lap_joint_case
 
 SMALL = {"lap_joint.refine": 0, "lap_joint.convergence.coarsening": [],
          "lap_joint.protocols.names": ["sequential"], "output.fields": []}
@@ -51,8 +53,6 @@ def test_accelerate_is_read_from_the_case_file_and_a_non_bool_is_one_line(tmp_pa
     code, out, err = run_cli("run", bad, "--out", tmp_path / "bad_out")
     assert code == 2 and "run.accelerate" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "bad_out").exists()
-    from slipcycle.api import as_case
-    from slipcycle.joints.lap_joint_case import read_lap_joint_case
     case = read_lap_joint_case(as_case(example_path("bolted_lap_joint.toml"),
                                        {"run.accelerate": True}))
     assert case.settings.run["accelerate"] is True
