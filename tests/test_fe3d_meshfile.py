@@ -384,7 +384,9 @@ def _rotation(axis, angle) -> np.ndarray:
 
 @settings(max_examples=40, deadline=None)
 @given(axis=st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1),
-       angle=st.floats(-np.pi, np.pi), tilt=st.floats(0.0, 0.5), flip=st.booleans())
+       # tilt · LX < H: at tilt = H / LX = 0.4 the base meets the top at x = LX (the end
+       # face collapses onto the base plane), beyond it the tetrahedra there invert
+       angle=st.floats(-np.pi, np.pi), tilt=st.floats(0.0, 0.3), flip=st.booleans())
 @example(axis=(1, 0, 0), angle=np.pi, tilt=0.0, flip=False)
 @example(axis=(0, 1, 0), angle=np.pi / 2, tilt=0.3, flip=True)
 def test_the_flat_side_check_accepts_the_rotated_normal_and_refuses_its_reverse(
