@@ -29,14 +29,15 @@ from slipcycle.io.case import Case, CaseError, parse_case_text, read_case
 if TYPE_CHECKING:  # pragma: no cover
     from slipcycle.result import RunResult
 
-__all__ = ["run", "as_case", "apply_overrides", "toml_text"]
+__all__ = ["run", "as_case", "apply_overrides", "toml_text", "takes_workers"]
 
 _KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(\[(\d+)\])?$")
 _BARE = re.compile(r"^[A-Za-z0-9_-]+$")
 
 
 def run(case: Any, overrides: Mapping[str, Any] | None = None, *,
-        progress: Callable[[float, float], None] | None = None) -> RunResult:
+        progress: Callable[[float, float], None] | None = None,
+        workers: int | None = None) -> RunResult:
     """Validate and solve ``case`` with its model; return the model's result object.
 
     Parameters
@@ -61,6 +62,10 @@ def run(case: Any, overrides: Mapping[str, Any] | None = None, *,
         ``progress(done, total)``, called by a solver that reports its progress (one
         whose entry point takes a ``progress`` keyword); solvers without such a hook
         ignore it (the command line then shows only the elapsed time).
+    workers : int, optional
+        Processes for a solver that runs several independent simulations (one whose
+        entry point takes a ``workers`` keyword: the protocol runs of a ``lap_joint``
+        case; :func:`takes_workers`); the others ignore it. Default: the solver's (1).
 
     Returns
     -------
@@ -89,22 +94,26 @@ def run(case: Any, overrides: Mapping[str, Any] | None = None, *,
         if target is None:  # entry_for_object finds entries with a model_solver only
             raise TypeError(f"model {found[0]!r} solves no model objects")
         solve = registry.resolve(target)
-        extra = _progress_keyword(solve, progress)
+        extra = _keywords(solve, progress=progress, workers=workers)
         return solve(*case, **extra) if isinstance(case, tuple) else solve(case, **extra)
     c = as_case(case, overrides)
     solve = registry.solver(c.model)
-    return solve(c, **_progress_keyword(solve, progress))
+    return solve(c, **_keywords(solve, progress=progress, workers=workers))
 
 
-def _progress_keyword(solve: Callable[..., Any], progress) -> dict:
-    """``{"progress": progress}`` if ``solve`` takes a ``progress`` keyword, else ``{}``."""
-    if progress is None:
-        return {}
+def _keywords(solve: Callable[..., Any], **given) -> dict:
+    """The keywords of ``given`` that are not None and that ``solve`` takes."""
     try:
         params = inspect.signature(solve).parameters
     except (TypeError, ValueError):
         return {}
-    return {"progress": progress} if "progress" in params else {}
+    return {k: v for k, v in given.items() if v is not None and k in params}
+
+
+def takes_workers(model: str) -> bool:
+    """Whether the solver of ``model`` runs several simulations in worker processes
+    (takes :func:`run`'s ``workers``)."""
+    return "workers" in _keywords(registry.solver(model), workers=1)
 
 
 def as_case(case: Any, overrides: Mapping[str, Any] | None = None) -> Case:

@@ -13,7 +13,26 @@
 __all__ = ["InputError", "CaseError", "ModelError", "SolverError", "InadmissibleInitialState"]
 
 
-class InputError(ValueError):
+def _rebuilt(cls, args: tuple, state: dict) -> BaseException:
+    """An exception of class ``cls`` with ``args`` and attributes ``state``, its
+    ``__init__`` not called (:meth:`_Picklable.__reduce__`)."""
+    exc = cls.__new__(cls)
+    exc.args = args
+    exc.__dict__.update(state)
+    return exc
+
+
+class _Picklable:
+    """Pickled as its message and attributes: the default pickling of an exception calls
+    ``cls(*args)``, which fails where ``__init__`` takes other arguments than the message,
+    so an error raised in a worker process (sweeps, protocol runs) reached its parent as
+    a pickling error instead of itself."""
+
+    def __reduce__(self):
+        return _rebuilt, (type(self), self.args, dict(self.__dict__))
+
+
+class InputError(_Picklable, ValueError):
     """Invalid input. ``key`` names the offending key, option, matrix or file."""
 
     def __init__(self, key: str, problem: str):
@@ -63,7 +82,7 @@ class SolverError(RuntimeError):
     rate problem that has no solution). The CLI reports it as one line, exit code 3."""
 
 
-class InadmissibleInitialState(ValueError):
+class InadmissibleInitialState(_Picklable, ValueError):
     """An initial slip state that violates a friction or contact inequality at θ = 0
     (discrete models): ``node``, its ``margin`` (N; f p − |q|, or the contact margin) and
     whether the node is open (``separated``: w > 0 at θ = 0, so it carries no reaction)."""

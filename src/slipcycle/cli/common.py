@@ -267,7 +267,7 @@ def count_option(text: str) -> int:
     return int(val)
 
 
-class _Workers(argparse.Action):
+class Workers(argparse.Action):
     """``--workers N``: a whole number >= 1, refused in one line otherwise."""
 
     def __call__(self, parser, namespace, values, option_string=None):
@@ -284,7 +284,7 @@ class _Workers(argparse.Action):
 
 def add_common(p) -> None:
     """Options shared by the sweep-based commands (sweep, basins, shakedown)."""
-    p.add_argument("--workers", action=_Workers, default=None, metavar="N",
+    p.add_argument("--workers", action=Workers, default=None, metavar="N",
                    help="local worker processes (default: all cores; 1 = this process)")
     p.add_argument("--scheduler", default=None,
                    help="address of an existing Dask scheduler, e.g. tcp://10.0.0.1:8786")

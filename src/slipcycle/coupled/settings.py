@@ -8,9 +8,13 @@ once, where the settings are made). :class:`SolverStats` counts what a run did.
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
+
+from slipcycle.errors import InputError
 
 __all__ = ["RunSettings", "SolverStats", "SETTING_ALIASES"]
 
@@ -50,6 +54,10 @@ class RunSettings(Mapping):
     ------
     TypeError
         ``accelerate`` that is neither a bool nor None (named ``run.accelerate``).
+    InputError
+        A count that is not a whole number >= 1, a tolerance outside (0, 1), or
+        ``replay`` that is neither a bool nor None (named ``run.<setting>``): the case
+        readers check the same, this is the check of settings made in Python.
     """
 
     cycles: int = 40
@@ -63,6 +71,19 @@ class RunSettings(Mapping):
     def __post_init__(self):
         if self.accelerate is not None and not isinstance(self.accelerate, bool):
             raise TypeError(f"run.accelerate: must be true or false, got {self.accelerate!r}")
+        for key in ("cycles", "steps_per_cycle", "min_cycles"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+                raise InputError(f"run.{key}", f"must be a whole number >= 1, got {value!r}")
+        for key in ("tol", "step_tol"):
+            value = getattr(self, key)
+            if value is None and key == "step_tol":
+                continue
+            if (isinstance(value, bool) or not isinstance(value, numbers.Real)
+                    or not math.isfinite(value) or not 0.0 < value < 1.0):
+                raise InputError(f"run.{key}", f"must be a number in (0, 1), got {value!r}")
+        if self.replay is not None and not isinstance(self.replay, bool):
+            raise InputError("run.replay", f"must be true or false, got {self.replay!r}")
 
     @classmethod
     def of(cls, run: Mapping | None, defaults: RunSettings) -> RunSettings:

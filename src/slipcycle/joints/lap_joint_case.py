@@ -351,7 +351,8 @@ def joint_contact(joint) -> JointContact:
                         bolt_shortening=dict(model.bolt_shortening))
 
 
-def solve_model(lc: LapJointCase, *, progress=None) -> LapJointResult:
+def solve_model(lc: LapJointCase, *, progress=None, workers: int | None = None
+                ) -> LapJointResult:
     """Reduce the joint on every mesh (coarse → fine) and run every protocol.
 
     Parameters
@@ -359,6 +360,10 @@ def solve_model(lc: LapJointCase, *, progress=None) -> LapJointResult:
     lc : LapJointCase
     progress : callable, optional
         ``progress(done, total)`` after each protocol run.
+    workers : int, optional
+        Processes running the protocol runs side by side
+        (:func:`~slipcycle.joints.lap_joint_study.protocol_runs`; default 1, this
+        process; ``slipcycle run`` uses every core). The results do not depend on it.
 
     Returns
     -------
@@ -381,14 +386,17 @@ def solve_model(lc: LapJointCase, *, progress=None) -> LapJointResult:
     if lc.melan_check or lc.window is not None:
         return lap_joint_showcase(contacts, lc.protocols, lc.settings,
                                   melan_check=lc.melan_check, window=lc.window,
-                                  fields=lc.fields, progress=progress)
+                                  fields=lc.fields, progress=progress,
+                                  workers=workers)
     return lap_joint_study(contacts, lc.protocols, lc.settings, fields=lc.fields,
-                           progress=progress)
+                           progress=progress, workers=workers)
 
 
-def solve_case(case: Case, *, progress=None) -> LapJointResult:
-    """Validate a ``lap_joint`` case completely, then solve it."""
-    return solve_model(read_lap_joint_case(case), progress=progress)
+def solve_case(case: Case, *, progress=None, workers: int | None = None
+               ) -> LapJointResult:
+    """Validate a ``lap_joint`` case completely, then solve it (``workers`` as
+    :func:`solve_model`)."""
+    return solve_model(read_lap_joint_case(case), progress=progress, workers=workers)
 
 
 def run_case(case: Case) -> RunOutputs:

@@ -61,6 +61,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from slipcycle.coupled.settings import RunSettings
 from slipcycle.discrete3d import FrictionalSystem3D, Load3D, LoadCase3D
 from slipcycle.discrete3d.case import RUN_DEFAULTS
 from slipcycle.discrete3d.evolution import Evolution3D
@@ -337,7 +338,9 @@ class StudySettings:
         if unknown:
             raise InputError("run", f"unknown run setting {sorted(unknown)[0]!r} (known: "
                              f"{', '.join(known)})")
-        object.__setattr__(self, "run", {**RUN_DEFAULTS, **self.run})
+        run = {**RUN_DEFAULTS, **self.run}
+        RunSettings(**run)      # the values checked before any run (one line per key)
+        object.__setattr__(self, "run", run)
 
 
 

@@ -90,7 +90,7 @@ def _window(contact: JointContact, protocols, settings: StudySettings, opts: Win
 def lap_joint_showcase(contacts: JointContact | Sequence[JointContact], protocols: Sequence,
                        settings: StudySettings, *, melan_check: bool = True,
                        window: WindowOptions | None = None, fields: tuple = ("xdmf",),
-                       progress=None) -> LapJointShowcase:
+                       progress=None, workers: int | None = None) -> LapJointShowcase:
     """The protocol study, its B = 0 twin and the shakedown window on every mesh.
 
     Parameters
@@ -107,6 +107,9 @@ def lap_joint_showcase(contacts: JointContact | Sequence[JointContact], protocol
         Field formats of the coupled study.
     progress : callable, optional
         ``progress(done, total)`` of the coupled study.
+    workers : int, optional
+        Processes running the protocol runs of each study side by side
+        (:func:`~slipcycle.joints.lap_joint_study.protocol_runs`).
 
     Returns
     -------
@@ -114,9 +117,9 @@ def lap_joint_showcase(contacts: JointContact | Sequence[JointContact], protocol
     """
     contacts = [contacts] if isinstance(contacts, JointContact) else list(contacts)
     coupled = lap_joint_study(contacts, protocols, settings, fields=fields,
-                              progress=progress)
+                              progress=progress, workers=workers)
     decoupled = (lap_joint_study([c.decoupled() for c in contacts], protocols, settings,
-                                 fields=()) if melan_check else None)
+                                 fields=(), workers=workers) if melan_check else None)
     chosen = [] if window is None else (
         list(range(len(contacts))) if window.meshes is None else list(window.meshes))
     windows = tuple(_window(contacts[i], protocols, settings, window) for i in chosen)

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
+from concurrent.futures import as_completed
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -54,11 +55,12 @@ from slipcycle.joints.lap_joint_result import (
 )
 from slipcycle.kernels.threads import single_threaded_blas
 from slipcycle.loading import HarmonicLoad
+from slipcycle.sweep.core import TaskRunner
 
 __all__ = ["JointContact", "Protocol", "Step", "StudySettings", "STANDARD_PROTOCOLS",
            "standard_protocol", "joint_load", "protocol_states", "joint_system",
-           "run_protocol", "ProtocolRun", "lap_joint_study", "LapJointResult", "MeshRuns",
-           "NODE_CLASSES"]
+           "run_protocol", "ProtocolRun", "protocol_runs", "lap_joint_study",
+           "LapJointResult", "MeshRuns", "NODE_CLASSES"]
 
 
 def joint_load(contact: JointContact, preload: float, service_amplitude: float) -> Load3D:
@@ -162,7 +164,8 @@ def run_protocol(contact: JointContact, protocol: Protocol, settings: StudySetti
 
 def lap_joint_study(contacts: JointContact | Sequence[JointContact],
                     protocols: Sequence[Protocol], settings: StudySettings, *,
-                    fields: tuple = ("xdmf",), progress=None) -> LapJointResult:
+                    fields: tuple = ("xdmf",), progress=None,
+                    workers: int | None = None) -> LapJointResult:
     """Run every protocol on the joint (and on coarser meshes for the mesh convergence).
 
     Parameters
@@ -179,6 +182,9 @@ def lap_joint_study(contacts: JointContact | Sequence[JointContact],
         Field formats (``"xdmf"``, ``"pvd"``) written per protocol by ``to_outputs``.
     progress : callable, optional
         ``progress(done, total)`` after each run.
+    workers : int, optional
+        Processes running the protocol runs side by side (:func:`protocol_runs`;
+        default 1, this process). The results do not depend on it.
 
     Returns
     -------
@@ -199,29 +205,77 @@ def lap_joint_study(contacts: JointContact | Sequence[JointContact],
     for c in contacts:
         for p in protocols:
             p.check(c.bolt_count)
-    total = len(contacts) * len(protocols)
-    diss = np.full((len(contacts), len(protocols)), np.nan)
-    states = np.full((len(contacts), len(protocols)), "not_converged", dtype=object)
-    finest: list[DiscreteResult3D] = []
-    bolts: list[BoltForces] = []
-    done = 0
-    with single_threaded_blas():   # small dense solves: threads only spin (kernels.threads)
-        for m, contact in enumerate(contacts):
-            last = m == len(contacts) - 1
-            system = (locked_system(contact, settings.friction, settings.accept_ill_posed)
-                      if contact.elastic else joint_system(contact, settings))
-            for j, protocol in enumerate(protocols):
-                run = run_protocol(contact, protocol, settings, fields if last else (),
-                                   system)
-                res = run.result
-                diss[m, j] = res.solution.dissipation_per_cycle
-                states[m, j] = res.solution.steady_state
-                if last:
-                    finest.append(res)
-                    bolts.append(run.bolts)
-                done += 1
-                if progress is not None:
-                    progress(done, total)
-    mesh = MeshRuns(tuple(spacing), diss, states.astype(str))
-    return LapJointResult.from_runs(contacts[-1], tuple(protocols), tuple(finest), mesh,
-                                    settings, time.perf_counter() - t0, tuple(bolts))
+    # the systems are checked well posed once per mesh, before any run starts
+    systems = [locked_system(c, settings.friction, settings.accept_ill_posed)
+               if c.elastic else joint_system(c, settings) for c in contacts]
+    last = len(contacts) - 1
+    tasks = [(contact, protocol, settings, fields if m == last else (), systems[m])
+             for m, contact in enumerate(contacts) for protocol in protocols]
+    runs = protocol_runs(tasks, workers, progress)
+    k = len(protocols)
+    diss = np.array([r.result.solution.dissipation_per_cycle for r in runs]).reshape(-1, k)
+    states = np.array([r.result.solution.steady_state for r in runs], dtype=object)
+    finest = runs[last * k:]
+    mesh = MeshRuns(tuple(spacing), diss, states.reshape(-1, k).astype(str))
+    return LapJointResult.from_runs(contacts[-1], tuple(protocols),
+                                    tuple(r.result for r in finest), mesh, settings,
+                                    time.perf_counter() - t0,
+                                    tuple(r.bolts for r in finest))
+
+
+def _protocol_task(contact, protocol, settings, fields, system) -> ProtocolRun:
+    """:func:`run_protocol` with one BLAS thread (small dense solves: threads only
+    spin, :mod:`slipcycle.kernels.threads`)."""
+    with single_threaded_blas():
+        return run_protocol(contact, protocol, settings, fields, system)
+
+
+def protocol_runs(tasks: Sequence[tuple], workers: int | None = None, progress=None
+                  ) -> list[ProtocolRun]:
+    """The protocol runs ``tasks`` (argument tuples of :func:`run_protocol`), in order.
+
+    Each run is independent of the others, so with ``workers`` > 1 they run side by side
+    in local worker processes (:class:`~slipcycle.sweep.core.TaskRunner`; at most one
+    per run), the last tasks (the finest mesh: the longest runs) started first. A run
+    gives the same numbers in a worker as in this process. If a run fails, the runs not
+    started are cancelled and its error is raised. As with any process pool, a script
+    that asks for workers must guard its entry point (``if __name__ == "__main__":``):
+    the workers import the script's main module.
+
+    Parameters
+    ----------
+    tasks : sequence of tuple
+        ``(contact, protocol, settings, fields, system)`` per run.
+    workers : int, optional
+        Worker processes (default 1: every run in this process).
+    progress : callable, optional
+        ``progress(done, total)`` after each run.
+    """
+    total = len(tasks)
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):
+        raise InputError("workers", f"must be a whole number >= 1, got {workers!r}")
+    workers = min(total, workers or 1)
+    runs: list = [None] * total
+    if workers <= 1:
+        for i, task in enumerate(tasks):
+            runs[i] = _protocol_task(*task)
+            if progress is not None:
+                progress(i + 1, total)
+        return runs
+    with TaskRunner(workers) as runner:
+        pool = runner.pool(_protocol_task)
+        order = list(range(total))[::-1]
+        # at most one run waiting per worker: each task carries its mesh's stiffness
+        pending = {}
+        for done in range(total + 1):
+            while order and len(pending) < 2 * workers:
+                i = order.pop(0)
+                pending[pool.submit(_protocol_task, *tasks[i])] = i
+            if done == total:
+                break
+            fut = next(as_completed(pending))
+            runs[pending.pop(fut)] = fut.result()
+            if progress is not None:
+                progress(done + 1, total)
+    return runs
