@@ -112,7 +112,8 @@ def test_errors_survive_the_trip_from_a_worker_process(error):
 
 @pytest.mark.parametrize(("key", "value"), [
     ("cycles", 0), ("cycles", 2.5), ("steps_per_cycle", -3), ("min_cycles", True),
-    ("tol", 0.0), ("tol", 1.5), ("tol", float("nan")), ("step_tol", 0.0),
+    ("tol", -1e-3), ("tol", float("inf")), ("tol", float("nan")), ("step_tol", 0.0),
+    ("step_tol", "1e-4"),
     ("replay", "yes"),
 ])
 def test_run_settings_made_in_python_are_checked_like_the_case_files(key, value):

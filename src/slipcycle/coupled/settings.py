@@ -22,6 +22,12 @@ __all__ = ["RunSettings", "SolverStats", "SETTING_ALIASES"]
 SETTING_ALIASES = {"steady_tol": "tol", "tolerance": "tol", "step_tolerance": "step_tol"}
 
 
+def _finite(value) -> bool:
+    """A real number (not a bool), finite."""
+    return (isinstance(value, numbers.Real) and not isinstance(value, bool)
+            and math.isfinite(value))
+
+
 @dataclass(frozen=True)
 class RunSettings(Mapping):
     """Run settings of a steady-state run (both discrete models).
@@ -55,9 +61,10 @@ class RunSettings(Mapping):
     TypeError
         ``accelerate`` that is neither a bool nor None (named ``run.accelerate``).
     InputError
-        A count that is not a whole number >= 1, a tolerance outside (0, 1), or
-        ``replay`` that is neither a bool nor None (named ``run.<setting>``): the case
-        readers check the same, this is the check of settings made in Python.
+        A count that is not a whole number >= 1, ``tol`` < 0 or ``step_tol`` <= 0 (or
+        not finite), or ``replay`` that is neither a bool nor None (named
+        ``run.<setting>``): the settings made in Python (the case readers check tighter
+        bounds).
     """
 
     cycles: int = 40
@@ -75,13 +82,13 @@ class RunSettings(Mapping):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
                 raise InputError(f"run.{key}", f"must be a whole number >= 1, got {value!r}")
-        for key in ("tol", "step_tol"):
-            value = getattr(self, key)
-            if value is None and key == "step_tol":
-                continue
-            if (isinstance(value, bool) or not isinstance(value, numbers.Real)
-                    or not math.isfinite(value) or not 0.0 < value < 1.0):
-                raise InputError(f"run.{key}", f"must be a number in (0, 1), got {value!r}")
+        tol, step_tol = self.tol, self.step_tol
+        if not _finite(tol) or tol < 0.0:
+            # 0: no cycle is accepted as steady (every cycle run); the case files ask (0, 1)
+            raise InputError("run.tol", f"must be a finite number >= 0, got {tol!r}")
+        if step_tol is not None and (not _finite(step_tol) or step_tol <= 0.0):
+            raise InputError("run.step_tol", f"must be a finite number > 0, got "
+                                             f"{step_tol!r}")
         if self.replay is not None and not isinstance(self.replay, bool):
             raise InputError("run.replay", f"must be true or false, got {self.replay!r}")
 

@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["add_rows", "gather_block", "classify_nodes", "active_residual", "lu_solve",
+__all__ = ["add_rows", "copy_block", "gather_block", "classify_nodes", "active_residual",
+           "lu_solve",
            "chord_newton", "fix_nodes", "add_at", "step_dissipation", "doubling_error",
            "book_step", "event_values", "event_crossings", "slip_jacobian",
            "active_newton", "slip_rounds"]
@@ -43,6 +44,17 @@ def add_rows(K, rows, coef, out):  # pragma: no cover - compiled
             row = K[rows[k]]
             for i in range(size):
                 out[i] += c * row[i]
+
+
+@njit(cache=True, nogil=True)
+def copy_block(dst, dst_rows, dst_cols, src, src_rows, src_cols):  # pragma: no cover
+    """``dst[ix_(dst_rows, dst_cols)] = src[ix_(src_rows, src_cols)]`` without the
+    index arrays and copies of fancy indexing."""
+    for a in range(dst_rows.size):
+        d = dst[dst_rows[a]]
+        s = src[src_rows[a]]
+        for b in range(dst_cols.size):
+            d[dst_cols[b]] = s[src_cols[b]]
 
 
 @njit(cache=True, nogil=True)

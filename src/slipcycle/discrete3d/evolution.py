@@ -107,6 +107,7 @@ from slipcycle.discrete3d._kernels import (
     add_rows,
     book_step,
     classify_nodes,
+    copy_block,
     doubling_error,
     event_crossings,
     event_values,
@@ -536,16 +537,20 @@ class StepSolver:
         rows_old = np.concatenate([cols_old, s + np.flatnonzero(old)])
         rows_src = np.concatenate([src, 2 * S_last.size + pos[old]])
         rows_new = np.concatenate([cols_new, s + np.flatnonzero(~old)])
-        W = np.empty((m - s, s))
-        W[:, cols_old] = W_last[:, src]
-        if cols_new.size:
-            W[:, cols_new] = cho_solve(cho, KVU[s:m, cols_new], check_finite=False)
+        # row k of K̃'s base [K_{S,S}; K_{N,S}] is row k (tangential) or m + k − s
+        # (normal) of KVU
+        base = np.concatenate([np.arange(s), np.arange(m, m + ns)])
+        p = m - s
+        W = np.empty((p, s))
+        all_p = np.arange(p)
+        copy_block(W, all_p, cols_old, W_last, all_p, src)
         Kt = np.empty((s + ns, s))
-        Kt[np.ix_(rows_old, cols_old)] = Kt_last[np.ix_(rows_src, src)]
+        copy_block(Kt, rows_old, cols_old, Kt_last, rows_src, src)
         if cols_new.size:
-            base = np.vstack([KVU[:s], KVU[m:]])
-            Kt[:, cols_new] = base[:, cols_new] - KSP @ W[:, cols_new]
-            Kt[np.ix_(rows_new, cols_old)] = (base[np.ix_(rows_new, cols_old)]
+            Wn = cho_solve(cho, KVU[s:m, cols_new], check_finite=False)
+            copy_block(W, all_p, cols_new, Wn, all_p, np.arange(cols_new.size))
+            Kt[:, cols_new] = gather_block(KVU, base, cols_new) - KSP @ Wn
+            Kt[rows_new[:, None], cols_old] = (gather_block(KVU, base[rows_new], cols_old)
                                                - KSP[rows_new] @ W[:, cols_old])
         return W, Kt
 
