@@ -79,7 +79,7 @@ s = res.summary()
 print(json.dumps({"wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,
                   "nodes": s["n_nodes"], "protocols": len(s["protocols"]),
                   "meshes": len(s["mesh_spacing"]),
-                  "D": s["protocol_dissipation_per_cycle"]}))
+                  "D": [float(d) for d in s["protocol_dissipation_per_cycle"]]}))
 """
 
 

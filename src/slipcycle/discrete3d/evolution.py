@@ -212,6 +212,10 @@ class StepSolver:
         Bound of each cache of per-active-set blocks and factors [bytes] (default
         :attr:`cache_bytes`, and at most 8 × the bytes of K above 256 MiB); the steps do
         not depend on it.
+    force_floor : float
+        Least Newton residual tolerance [N]: the round-off of the largest force the
+        state carries (:class:`Evolution3D`), which ``rel_tol`` × ``force_scale`` of a
+        small service load would ask the iteration to go below.
     """
 
     #: largest residual ratio of a chord step before the Newton matrix is refactorised
@@ -224,7 +228,7 @@ class StepSolver:
 
     def __init__(self, system: FrictionalSystem3D, force_scale: float,
                  rel_tol: float = 1e-13, max_iter: int = 60,
-                 cache_bytes: int | None = None):
+                 cache_bytes: int | None = None, force_floor: float = 0.0):
         self.sys = system
         n = self.n = system.n_nodes
         self.K = np.ascontiguousarray(system.K)
@@ -234,7 +238,7 @@ class StepSolver:
         # contact/separation are decided on comparable force scales
         self.rho_t = 0.5 * (np.diag(A)[0::2] + np.diag(A)[1::2])
         self.rho_n = np.diag(C).copy()
-        self.force_tol = rel_tol * force_scale
+        self.force_tol = max(rel_tol * force_scale, float(force_floor))
         self.max_iter = max_iter
         self.stats = {"solves": 0, "newton_iterations": 0, "failures": 0,
                       "factorisations": 0}
@@ -794,6 +798,9 @@ class _OpenCondensation:
         return Step(x, r, modes, drw, step.iterations), None
 
 
+#: unit round-off of float64
+_EPS = float(np.finfo(float).eps)
+
 # placeholders of the arrays chord_newton does not read for a kind of active set (typed
 # as the real ones, so that one compiled version serves)
 _NO_LU = np.empty((0, 0), order="F")
@@ -913,6 +920,9 @@ class Evolution3D:
     #: an event within this fraction of a load interval from a step's end is taken
     #: at that end (no steps shorter than this are made for events)
     event_min = 1e-8
+    #: the Newton tolerance is at least this many units of round-off of the largest
+    #: force the state carries (:class:`StepSolver` ``force_floor``)
+    roundoff_ulps = 4.0
 
     def __init__(self, system: FrictionalSystem3D, x0: np.ndarray, r_w0: np.ndarray,
                  force_scale: float, *, step_tol: float = 1e-7, max_depth: int = 30,
@@ -923,15 +933,21 @@ class Evolution3D:
         self.F = float(force_scale)
         self.stiffness = system.stiffness_scale()
         self.disp_scale = self.F / self.stiffness
-        self.solver = StepSolver(system, self.F)
+        self.x = np.array(x0, float)
+        self.r_w = np.array(r_w0, float)
+        self.r = self.r_w + self.K @ self.x
+        # the Newton tolerance follows the force scale (the service cycle's), but not
+        # below the round-off of the forces the state carries: a preload 1e6 times the
+        # service load left a residual no iteration could reach
+        carried = max(float(np.max(np.abs(self.r_w), initial=0.0)),
+                      float(np.max(np.abs(self.r), initial=0.0)))
+        self.solver = StepSolver(system, self.F,
+                                 force_floor=self.roundoff_ulps * _EPS * carried)
         self.step_tol = float(step_tol)
         self.max_depth = int(max_depth)
         self.substeps = int(substeps)
         self.adaptive = bool(adaptive)
         self.extrapolate = bool(extrapolate)
-        self.x = np.array(x0, float)
-        self.r_w = np.array(r_w0, float)
-        self.r = self.r_w + self.K @ self.x
         disp_tol = 1e-12 * self.F / self.stiffness
         self.modes = np.where(self.x[2 * self.n:] > disp_tol, SEPARATED, STICK).astype(np.int8)
         self._totals: PathTotals3D | None = None
