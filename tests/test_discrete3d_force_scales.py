@@ -3,9 +3,9 @@ and every load scaled by a common factor.
 
 References: positive homogeneity of rate-independent friction with linear elasticity
 (loads × λ → state × λ, dissipation × λ²), and the elastic limit: a service load far
-below what friction holds shakes down. Before the Newton tolerance had a floor at the
-round-off of the forces the state carries, a service load 1e-8 of the preload (or a
-preload 1e7 times the service load) ended in "no solution the Newton method can find".
+below what friction holds shakes down. Before the Newton tolerance of an active set had a
+floor at the round-off of the terms of its rows, a service load 1e-8 of the preload (or a
+preload 1e6 times the service load) ended in "no solution the Newton method can find".
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def test_a_service_load_far_below_the_preload_shakes_down(preload, ratio_exp):
 def test_without_the_round_off_floor_such_a_run_fails(monkeypatch):
     """The floor is what makes the case above run: without it the Newton iteration is
     asked for a residual below the round-off of the preload's forces."""
-    monkeypatch.setattr(ev.Evolution3D, "roundoff_ulps", 0.0)
+    monkeypatch.setattr(ev.StepSolver, "roundoff_ulps", 0.0)
     with pytest.raises(ev.IncrementalSolverError):
         _study(1e4, 1e-4)
 

@@ -212,10 +212,6 @@ class StepSolver:
         Bound of each cache of per-active-set blocks and factors [bytes] (default
         :attr:`cache_bytes`, and at most 8 × the bytes of K above 256 MiB); the steps do
         not depend on it.
-    force_floor : float
-        Least Newton residual tolerance [N]: the round-off of the largest force the
-        state carries (:class:`Evolution3D`), which ``rel_tol`` × ``force_scale`` of a
-        small service load would ask the iteration to go below.
     """
 
     #: largest residual ratio of a chord step before the Newton matrix is refactorised
@@ -225,10 +221,13 @@ class StepSolver:
     eliminate_separated = True
     #: upper bound of each of the three per-active-set caches [bytes]
     cache_bytes = 2 ** 30
+    #: the Newton tolerance of an active set is at least this many units of round-off
+    #: of the largest reaction of its rows (:meth:`_tolerance`)
+    roundoff_ulps = 4.0
 
     def __init__(self, system: FrictionalSystem3D, force_scale: float,
                  rel_tol: float = 1e-13, max_iter: int = 60,
-                 cache_bytes: int | None = None, force_floor: float = 0.0):
+                 cache_bytes: int | None = None):
         self.sys = system
         n = self.n = system.n_nodes
         self.K = np.ascontiguousarray(system.K)
@@ -238,11 +237,15 @@ class StepSolver:
         # contact/separation are decided on comparable force scales
         self.rho_t = 0.5 * (np.diag(A)[0::2] + np.diag(A)[1::2])
         self.rho_n = np.diag(C).copy()
-        self.force_tol = max(rel_tol * force_scale, float(force_floor))
+        self.force_tol = rel_tol * force_scale
         self.max_iter = max_iter
         self.stats = {"solves": 0, "newton_iterations": 0, "failures": 0,
                       "factorisations": 0}
         self._rows_q = np.arange(2 * n).reshape(n, 2)
+        # Σ_j |K_ij| per row, in blocks of rows (no |K| the size of K): the round-off
+        # scale of the rows (:meth:`_tolerance`)
+        self._row_abs = np.concatenate([np.abs(self.K[i:i + 512]).sum(axis=1)
+                                        for i in range(0, self.K.shape[0], 512)])
         # exact per-set blocks and factors: a steady cycle's worth within a memory bound
         limit = self.cache_bytes if cache_bytes is None else cache_bytes
         budget = min(limit, max(2 ** 28, 8 * self.K.nbytes))
@@ -423,6 +426,20 @@ class StepSolver:
         self.stats["failures"] += 1
         return None
 
+    def _tolerance(self, x: np.ndarray, r: np.ndarray, V: np.ndarray) -> float:
+        """The residual tolerance [N] of the Newton iteration on the active rows ``V`` at
+        the iterate (x, r): ``force_tol`` (relative to the service cycle's force scale),
+        but not below :attr:`roundoff_ulps` units of round-off of the terms of those
+        rows, |r_i| + Σ_j |K_ij| max |x| (r = r^w + K x), which no residual resolves: a
+        service load 1e-8 of the preload asked for one under the preload's round-off,
+        and the step ended in "no solution the Newton method can find". Rows not in the
+        set do not count: a node clamped by a large force that stays stuck does not
+        coarsen the others' tolerance."""
+        if V.size == 0:
+            return self.force_tol
+        terms = np.abs(r[V]) + self._row_abs[V] * float(np.max(np.abs(x)))
+        return max(self.force_tol, self.roundoff_ulps * _EPS * float(np.max(terms)))
+
     def _slip_rounds(self, block, x, r, x0, it, rounds, fixed, modes, fix_t, fix_n, slip,
                      sep):
         """The rounds of :meth:`_newton` on an active set of slipping nodes only, compiled
@@ -441,13 +458,14 @@ class StepSolver:
         R, zs, zsn = np.empty(m), np.empty((fS.size, 2)), np.empty(fS.size)
         lu = self._lus.get(key)
         first, fresh, res_prev, stepped = True, False, np.inf, False
+        tol = self._tolerance(x, r, V)
         while True:
             f_lu, piv = (lu[0], lu[1]) if lu is not None else (_NO_LU, _NO_PIV)
             code, it, rounds, res_prev, stepped, count, ns, npp = slip_rounds(
                 self.K, x, r, x0, self.f, self.rho_t, self.rho_n, modes, fix_t, fix_n, slip,
                 sep, U, V, first, fixed, xU, rV, D, fS, rhoS, KVU, f_lu, piv,
                 lu is not None, fresh, it, rounds, self.max_iter, res_prev, stepped,
-                self.force_tol, self.chord_rate, R, zs, zsn)
+                tol, self.chord_rate, R, zs, zsn)
             if code != 3:
                 return code, it, rounds, count, ns, npp
             lu = self._factorise(0, block, None, zs, zsn, rV[m:])
@@ -611,8 +629,9 @@ class StepSolver:
         """
         key, U, V, KVU, fS, rhoS, rhoP = block
         ns, npp, m = fS.size, rhoP.size, U.size
+        tol = self._tolerance(x, r, V)
         if ns == 0:
-            D, done, it = self._separated_newton(block, x[U], r[V], it)
+            D, done, it = self._separated_newton(block, x[U], r[V], it, tol)
             if D is None:
                 return 4, False, it
             moved = bool(np.any(D))
@@ -629,7 +648,7 @@ class StepSolver:
         if elim is not None:
             kind, W, Kt, KSP = 2, elim[1], elim[2], elim[3]
             rP = r[V[2 * ns:m]]
-            if np.max(np.abs(rP)) > self.force_tol:
+            if np.max(np.abs(rP)) > tol:
                 # K_PP⁻¹ R_P of the separated rows, linear: zero after the first step. A
                 # residual already within the Newton tolerance (the round-off the last
                 # round left, in most rounds) is kept as it is, the steps solve
@@ -642,7 +661,7 @@ class StepSolver:
             status, it, res_prev, stepped, moved = active_newton(
                 kind, self.K, x, r, x0, U, V, first, xU, rV, D, fS, rhoS, rhoP, KVU, f_lu,
                 piv, W, KSP, Kt, phi, nvec, y, ya, lu is not None, fresh, it, self.max_iter,
-                res_prev, stepped, self.force_tol, self.chord_rate, R, zs, zsn)
+                res_prev, stepped, tol, self.chord_rate, R, zs, zsn)
             first = False
             if status == 3:
                 lu = self._factorise(kind, block, elim, zs, zsn, rV[m:])
@@ -652,9 +671,10 @@ class StepSolver:
                 continue
             return status, moved, it
 
-    def _separated_newton(self, block, xU, rV, it):
+    def _separated_newton(self, block, xU, rV, it, tol):
         """:meth:`_local_newton` of an active set of separated nodes only: the rows are
-        linear, the Newton matrix is K_PP itself (its Cholesky factor kept)."""
+        linear, the Newton matrix is K_PP itself (its Cholesky factor kept); ``tol`` the
+        residual tolerance (:meth:`_tolerance`)."""
         key, U, V, KVU, fS, rhoS, rhoP = block
         m = U.size
         D = np.zeros(m)
@@ -666,7 +686,7 @@ class StepSolver:
                                            R, _NO_NVEC, _NO_Y)
             if stepped and changed:
                 return D, False, it
-            if res <= self.force_tol:
+            if res <= tol:
                 return D, True, it
             if it >= self.max_iter:
                 return D, False, it
@@ -920,9 +940,6 @@ class Evolution3D:
     #: an event within this fraction of a load interval from a step's end is taken
     #: at that end (no steps shorter than this are made for events)
     event_min = 1e-8
-    #: the Newton tolerance is at least this many units of round-off of the largest
-    #: force the state carries (:class:`StepSolver` ``force_floor``)
-    roundoff_ulps = 4.0
 
     def __init__(self, system: FrictionalSystem3D, x0: np.ndarray, r_w0: np.ndarray,
                  force_scale: float, *, step_tol: float = 1e-7, max_depth: int = 30,
@@ -933,21 +950,15 @@ class Evolution3D:
         self.F = float(force_scale)
         self.stiffness = system.stiffness_scale()
         self.disp_scale = self.F / self.stiffness
-        self.x = np.array(x0, float)
-        self.r_w = np.array(r_w0, float)
-        self.r = self.r_w + self.K @ self.x
-        # the Newton tolerance follows the force scale (the service cycle's), but not
-        # below the round-off of the forces the state carries: a preload 1e6 times the
-        # service load left a residual no iteration could reach
-        carried = max(float(np.max(np.abs(self.r_w), initial=0.0)),
-                      float(np.max(np.abs(self.r), initial=0.0)))
-        self.solver = StepSolver(system, self.F,
-                                 force_floor=self.roundoff_ulps * _EPS * carried)
+        self.solver = StepSolver(system, self.F)
         self.step_tol = float(step_tol)
         self.max_depth = int(max_depth)
         self.substeps = int(substeps)
         self.adaptive = bool(adaptive)
         self.extrapolate = bool(extrapolate)
+        self.x = np.array(x0, float)
+        self.r_w = np.array(r_w0, float)
+        self.r = self.r_w + self.K @ self.x
         disp_tol = 1e-12 * self.F / self.stiffness
         self.modes = np.where(self.x[2 * self.n:] > disp_tol, SEPARATED, STICK).astype(np.int8)
         self._totals: PathTotals3D | None = None
