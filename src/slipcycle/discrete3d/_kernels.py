@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["add_rows", "copy_block", "gather_block", "classify_nodes", "active_residual",
-           "lu_solve",
+__all__ = ["add_rows", "copy_block", "row_terms", "gather_block", "classify_nodes",
+           "active_residual", "lu_solve",
            "chord_newton", "fix_nodes", "add_at", "step_dissipation", "doubling_error",
            "book_step", "event_values", "event_crossings", "slip_jacobian",
            "active_newton", "slip_rounds"]
@@ -44,6 +44,19 @@ def add_rows(K, rows, coef, out):  # pragma: no cover - compiled
             row = K[rows[k]]
             for i in range(size):
                 out[i] += c * row[i]
+
+
+@njit(cache=True, nogil=True)
+def row_terms(r, rows, row_abs, xmax):  # pragma: no cover - compiled
+    """max over ``rows`` of |r_i| + row_abs_i · xmax: the size of the terms of those rows
+    of r = r^w + K x (``StepSolver._tolerance``)."""
+    out = 0.0
+    for k in range(rows.size):
+        i = rows[k]
+        v = abs(r[i]) + row_abs[i] * xmax
+        if v > out:
+            out = v
+    return out
 
 
 @njit(cache=True, nogil=True)

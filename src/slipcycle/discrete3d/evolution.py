@@ -113,6 +113,7 @@ from slipcycle.discrete3d._kernels import (
     event_values,
     fix_nodes,
     gather_block,
+    row_terms,
     slip_jacobian,
     slip_rounds,
 )
@@ -381,6 +382,7 @@ class StepSolver:
         """The semismooth Newton iteration from the iterate (x, r) (both modified)."""
         self.stats["solves"] += 1
         n, K, f = self.n, self.K, self.f
+        xmax = float(np.max(np.abs(x0)))     # the rows' round-off scale (:meth:`_tolerance`)
         modes = np.empty(n, np.int8)
         fix_t = np.empty(n, np.bool_)
         fix_n = np.empty(n, np.bool_)
@@ -408,7 +410,8 @@ class StepSolver:
             if npp == 0:
                 # slipping nodes only: the rounds on this set run compiled
                 code, it, rounds, count, ns, npp = self._slip_rounds(
-                    block, x, r, x0, it, rounds, fixed, modes, fix_t, fix_n, slip, sep)
+                    block, x, r, x0, it, rounds, fixed, modes, fix_t, fix_n, slip, sep,
+                    xmax)
                 if code == 5:
                     self.stats["newton_iterations"] += it
                     return Step(x, r, modes.copy(), drw, it)
@@ -417,7 +420,7 @@ class StepSolver:
                 fixed, pending = count > 0, True
                 continue
             # x[U] and the reactions r are updated in place unless the round failed
-            status, moved, it = self._local_newton(block, x, r, x0, it)
+            status, moved, it = self._local_newton(block, x, r, x0, it, xmax)
             if status == 0 and not fixed and not moved:
                 self.stats["newton_iterations"] += it
                 return Step(x, r, modes.copy(), drw, it)
@@ -426,27 +429,26 @@ class StepSolver:
         self.stats["failures"] += 1
         return None
 
-    def _tolerance(self, x: np.ndarray, r: np.ndarray, V: np.ndarray) -> float:
-        """The residual tolerance [N] of the Newton iteration on the active rows ``V`` at
-        the iterate (x, r): ``force_tol`` (relative to the service cycle's force scale),
-        but not below :attr:`roundoff_ulps` units of round-off of the terms of those
-        rows, |r_i| + Σ_j |K_ij| max |x| (r = r^w + K x), which no residual resolves: a
-        service load 1e-8 of the preload asked for one under the preload's round-off,
-        and the step ended in "no solution the Newton method can find". Rows not in the
-        set do not count: a node clamped by a large force that stays stuck does not
-        coarsen the others' tolerance."""
-        if V.size == 0:
-            return self.force_tol
-        terms = np.abs(r[V]) + self._row_abs[V] * float(np.max(np.abs(x)))
-        return max(self.force_tol, self.roundoff_ulps * _EPS * float(np.max(terms)))
+    def _tolerance(self, r: np.ndarray, V: np.ndarray, xmax: float) -> float:
+        """The residual tolerance [N] of the Newton iteration on the active rows ``V``:
+        ``force_tol`` (relative to the service cycle's force scale), but not below
+        :attr:`roundoff_ulps` units of round-off of the terms of those rows,
+        |r_i| + Σ_j |K_ij| ``xmax`` (r = r^w + K x, ``xmax`` = max |x| of the step's
+        start), which no residual resolves: a service load 1e-8 of the preload asked for
+        one under the preload's round-off, and the step ended in "no solution the
+        Newton method can find". Rows not in the set do not count: a node clamped by a
+        large force that stays stuck does not coarsen the others' tolerance."""
+        floor = self.roundoff_ulps * _EPS * row_terms(r, V, self._row_abs, xmax)
+        return max(self.force_tol, floor)
 
     def _slip_rounds(self, block, x, r, x0, it, rounds, fixed, modes, fix_t, fix_n, slip,
-                     sep):
+                     sep, xmax):
         """The rounds of :meth:`_newton` on an active set of slipping nodes only, compiled
         (:func:`~slipcycle.discrete3d._kernels.slip_rounds`) until the set changes (code
         6, its classification done), the step converges (5) or fails (4); the Newton
         matrices are factorised here (:meth:`_factorise`) and kept per set as in
-        :meth:`_local_newton`.
+        :meth:`_local_newton`; ``xmax`` (max |x| at the step's start) sets the floor of
+        the residual tolerance (:meth:`_tolerance`).
 
         Returns
         -------
@@ -458,7 +460,7 @@ class StepSolver:
         R, zs, zsn = np.empty(m), np.empty((fS.size, 2)), np.empty(fS.size)
         lu = self._lus.get(key)
         first, fresh, res_prev, stepped = True, False, np.inf, False
-        tol = self._tolerance(x, r, V)
+        tol = self._tolerance(r, V, xmax)
         while True:
             f_lu, piv = (lu[0], lu[1]) if lu is not None else (_NO_LU, _NO_PIV)
             code, it, rounds, res_prev, stepped, count, ns, npp = slip_rounds(
@@ -603,7 +605,7 @@ class StepSolver:
         self._keep(key, lu)
         return lu
 
-    def _local_newton(self, block, x, r, x0, it):
+    def _local_newton(self, block, x, r, x0, it, xmax):
         """Newton iterations on the active unknowns U with the active set held fixed
         (compiled: :func:`~slipcycle.discrete3d._kernels.active_newton`), then x[U] and
         the reactions r (both modified) updated by the change D of x[U].
@@ -614,7 +616,8 @@ class StepSolver:
         the caller re-classifies every node. The Newton matrix last factorised for this
         active set is reused (chord steps) while the residual falls at least fourfold
         per step; the converged solution is that of the Newton method with a fresh
-        matrix, only the path differs.
+        matrix, only the path differs. ``xmax`` (max |x| at the step's start) sets the
+        floor of the residual tolerance (:meth:`_tolerance`).
 
         Returns
         -------
@@ -629,7 +632,7 @@ class StepSolver:
         """
         key, U, V, KVU, fS, rhoS, rhoP = block
         ns, npp, m = fS.size, rhoP.size, U.size
-        tol = self._tolerance(x, r, V)
+        tol = self._tolerance(r, V, xmax)
         if ns == 0:
             D, done, it = self._separated_newton(block, x[U], r[V], it, tol)
             if D is None:
