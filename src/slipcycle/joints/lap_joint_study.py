@@ -250,6 +250,11 @@ def protocol_runs(tasks: Sequence[tuple], workers: int | None = None, progress=N
         Worker processes (default 1: every run in this process).
     progress : callable, optional
         ``progress(done, total)`` after each run.
+
+    Returns
+    -------
+    list of ProtocolRun
+        In the order of ``tasks``.
     """
     total = len(tasks)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
