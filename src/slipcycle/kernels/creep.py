@@ -34,18 +34,14 @@ def creep_distance(starts, residual: float, xscale: float) -> float:
         ρ/(1 − ρ) · ``residual`` with ρ = |x_c − x_{c−1}| / |x_{c−1} − x_{c−2}| (max
         norms) where the increments shrink, by a ratio above one half; else ``residual``
         (a faster contraction has at most that much left; increments that do not shrink,
-        or increments within a thousand round-offs of the state give no ratio). With
-        fewer than three starts (one increment) no ratio bounds the rest: infinite
-        unless the increment is within those round-offs (the cycle reproduced its
-        start), since a first increment of ``tol`` can leave a creep of ρ/(1 − ρ) ×
-        ``tol`` (3 × at ρ = 0.75).
+        fewer than three starts, or increments within a thousand round-offs of the state
+        give no ratio).
     """
-    roundoff = 1e3 * np.finfo(float).eps * xscale
     if len(starts) < 3:
-        return residual if residual * xscale <= roundoff else np.inf
+        return residual
     last = residual * xscale
     before = float(np.max(np.abs(starts[-2] - starts[-3])))
-    if last <= roundoff or not 0.0 < last < before:
+    if last <= 1e3 * np.finfo(float).eps * xscale or not 0.0 < last < before:
         return residual
     rho = last / before
     return max(residual, residual * rho / (1.0 - rho))
