@@ -561,18 +561,17 @@ class StepSolver:
         rows_old = np.concatenate([cols_old, s + np.flatnonzero(old)])
         rows_src = np.concatenate([src, 2 * S_last.size + pos[old]])
         rows_new = np.concatenate([cols_new, s + np.flatnonzero(~old)])
-        # row k of K̃'s base [K_{S,S}; K_{N,S}] is row k (tangential) or m + k − s
-        # (normal) of KVU
-        base = np.concatenate([np.arange(s), np.arange(m, m + ns)])
-        p = m - s
-        W = np.empty((p, s))
-        all_p = np.arange(p)
+        all_p = np.arange(m - s)
+        W = np.empty((m - s, s))
         copy_block(W, all_p, cols_old, W_last, all_p, src)
         Kt = np.empty((s + ns, s))
         copy_block(Kt, rows_old, cols_old, Kt_last, rows_src, src)
         if cols_new.size:
             Wn = cho_solve(cho, KVU[s:m, cols_new], check_finite=False)
-            copy_block(W, all_p, cols_new, Wn, all_p, np.arange(cols_new.size))
+            W[:, cols_new] = Wn
+            # row k of K̃'s base [K_{S,S}; K_{N,S}] is row k (tangential) or m + k − s
+            # (normal) of KVU
+            base = np.concatenate([np.arange(s), np.arange(m, m + ns)])
             Kt[:, cols_new] = gather_block(KVU, base, cols_new) - KSP @ Wn
             Kt[rows_new[:, None], cols_old] = (gather_block(KVU, base[rows_new], cols_old)
                                                - KSP[rows_new] @ W[:, cols_old])
