@@ -270,17 +270,15 @@ def protocol_runs(tasks: Sequence[tuple], workers: int | None = None, progress=N
         return runs
     with TaskRunner(workers) as runner:
         pool = runner.pool(_protocol_task)
-        order = list(range(total))[::-1]
+        order = list(range(total))           # popped from the end: the last tasks first
         # at most one run waiting per worker: each task carries its mesh's stiffness
         pending = {}
-        for done in range(total + 1):
+        for done in range(1, total + 1):
             while order and len(pending) < 2 * workers:
-                i = order.pop(0)
+                i = order.pop()
                 pending[pool.submit(_protocol_task, *tasks[i])] = i
-            if done == total:
-                break
             fut = next(as_completed(pending))
             runs[pending.pop(fut)] = fut.result()
             if progress is not None:
-                progress(done + 1, total)
+                progress(done, total)
     return runs
