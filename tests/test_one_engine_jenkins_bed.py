@@ -67,6 +67,31 @@ def test_force_step_then_increment_reaches_the_target_force(n, seed):
     assert abs(q - target) <= 1e-10 * cap.sum()
 
 
+@settings(max_examples=200, deadline=None)
+@given(n=st.integers(1, 40), seed=st.integers(0, 2**31 - 1),
+       scale=st.floats(1e-16, 1e-6), sign=st.sampled_from([-1.0, 1.0]))
+def test_a_tiny_force_on_a_strong_bed_is_reached_relative_to_itself(n, seed, scale, sign):
+    """A target force 1e-16 … 1e-6 of the bed's capacity, on a bed carrying forces of
+    its own size: the step reaches it to 1e-9 of the target, not to a fraction of the
+    capacity (which left a 1e-12 rad twist of the rods unconverged, 2.7 % torque noise)."""
+    rng = np.random.default_rng(seed)
+    k = rng.uniform(1e3, 1e6, n)
+    cap = rng.uniform(10.0, 100.0, n)
+    t = np.zeros(n)
+    target = sign * scale * cap.sum()
+    dv, _ = solve_tangential_force(t, k, cap, target, 0.0)
+    q, _, _ = apply_increment(t, k, k, cap, dv, np.zeros(n), np.zeros(n), np.zeros(n), 0.0)
+    assert abs(q - target) <= 1e-9 * abs(target)
+    # the same force from a bed that already carries a self-equilibrated set of forces
+    # of 1e-3 of the target: the tolerance follows the forces summed, not the capacity
+    t0 = 1e-3 * abs(target) * np.resize([1.0, -1.0], n)
+    t0[-1] -= t0.sum()
+    t1 = t0.copy()
+    dv, _ = solve_tangential_force(t1, k, cap, target, 0.0)
+    q, _, _ = apply_increment(t1, k, k, cap, dv, np.zeros(n), np.zeros(n), np.zeros(n), 0.0)
+    assert abs(q - target) <= 1e-9 * abs(target)
+
+
 def test_rod_bed_step_uses_the_same_return_map():
     """A bed in series with compliance C: the elements end where the shared map puts them."""
     rng = np.random.default_rng(3)

@@ -216,3 +216,27 @@ def test_iwan_fit_is_reproducible_and_matches_anchor_values():
     assert -1 < iw.chi and iw.beta >= 0 and rms < 0.2
     bed, _ = iwan_bed(rods, N0, 100, iw)
     assert bed.stiffness == pytest.approx(iw.K_T, rel=1e-9)
+
+
+@pytest.mark.parametrize("amplitude", [1e-15, 1e-12, 1e-9])
+def test_a_stuck_twist_of_any_small_size_shakes_down_with_a_torque_linear_in_it(amplitude):
+    """Below slip inception (0.0121 rad) the interface sticks and the response is linear:
+    the shipped example at 1e-15 … 1e-9 rad shakes down in a few cycles with D = 0, its
+    steady residual within the tolerance and its torque amplitude proportional to the
+    twist (against 1e-6 rad, to 1e-6). At 1e-12 rad it used to end not converged after
+    300 cycles (the interface solve stopped at 1e-13 of its capacity, 60 N m, a few
+    per cent of a 1.3e-9 N m torque)."""
+    import slipcycle
+    from slipcycle.examples import example_path
+
+    def run(amp):
+        return slipcycle.run(example_path("rods_microslip.toml"),
+                             {"loading.rotation_amplitude": amp}).summary()
+
+    ref, small = run(1e-6), run(amplitude)
+    assert small["steady_state_class"] == "shakedown"
+    assert small["converged"] and small["cycles_run"] <= 5
+    assert small["dissipation_per_cycle"] == 0.0
+    assert small["steady_residual"] <= 1e-6
+    assert small["T_dyn_max"] / amplitude == pytest.approx(ref["T_dyn_max"] / 1e-6, rel=1e-6)
+    assert small["T_qs_max"] / amplitude == pytest.approx(ref["T_qs_max"] / 1e-6, rel=1e-6)

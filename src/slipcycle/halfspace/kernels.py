@@ -23,6 +23,7 @@ from numba import njit
 
 # the Jenkins bed's exact force-controlled step is shared with the rod solvers
 from slipcycle.kernels.jenkins import (
+    _RTOL,
     _newton,
     apply_increment,
     solve_tangential_force,
@@ -116,6 +117,7 @@ def drive_with(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
         # Σ clip(t, ±c), the stuck stiffness, and the bracket of the root.
         qmax = 0.0
         q0 = 0.0
+        qa0 = 0.0
         s0 = 0.0
         lo = 0.0
         hi = 0.0
@@ -140,10 +142,13 @@ def drive_with(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
             ti = t[i]
             if ti >= c:
                 q0 += c
+                qa0 += c
             elif ti <= -c:
                 q0 -= c
+                qa0 += c
             else:
                 q0 += ti
+                qa0 += abs(ti)
                 s0 += ke[i]
             b_lo = (-c - ti) * inv
             b_hi = (c - ti) * inv
@@ -170,10 +175,10 @@ def drive_with(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
                 # (no breakpoint between 0 and it): saves the sweep that would confirm it
                 r0 = q0 - target
                 dv = 0.0 - r0 / s0 if s0 > 0.0 else np.nan
-                if abs(r0) <= 1e-13 * (qmax + abs(target)):
+                if abs(r0) <= _RTOL * (qa0 + abs(target)):
                     dv = 0.0
                 elif not (below < dv < above):
-                    dv, p = _newton(t, ke, cap, target, 0.0, r0, s0, lo, hi, qmax)
+                    dv, p = _newton(t, ke, cap, target, 0.0, r0, s0, lo, hi, qmax, qa0)
                     passes += p
             else:
                 dv = 0.0  # nothing in contact and no load: nothing moves

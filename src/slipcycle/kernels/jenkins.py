@@ -32,6 +32,10 @@ from numba import njit
 __all__ = ["solve_tangential_force", "apply_increment", "drive_force_moving_limits"]
 
 _MAX_NEWTON = 60
+#: the root is accepted when |Σ clip − Q| ≤ _RTOL (Σ |clip| + |Q|): relative to the forces
+#: being summed (their round-off), not to the bed's capacity Σ c_i, which a tiny load
+#: (1e-12 of it) would leave unresolved
+_RTOL = 1e-13
 
 
 @njit(cache=True, inline="always")
@@ -45,19 +49,24 @@ def _clip(x, c):
 
 @njit(cache=True)
 def _force_and_slope(t, kt, cap, dv):
+    """Σ clip(t + κ ΔV, ±c), its slope, and Σ |clip(t + κ ΔV, ±c)| (the sum's scale)."""
     q = 0.0
     s = 0.0
+    qa = 0.0
     for i in range(t.size):
         x = t[i] + kt[i] * dv
         c = cap[i]
         if x >= c:
             q += c
+            qa += c
         elif x <= -c:
             q -= c
+            qa += c
         else:
             q += x
+            qa += abs(x)
             s += kt[i]
-    return q, s
+    return q, s, qa
 
 
 @njit(cache=True)
@@ -77,7 +86,7 @@ def _solve_exact_sorted(t, kt, cap, target, lo, hi):
     left, right = lo, hi
     while a <= b:  # find the two consecutive breakpoints bracketing the root
         mid = (a + b) // 2
-        q, _ = _force_and_slope(t, kt, cap, bp[mid])
+        q, _, _ = _force_and_slope(t, kt, cap, bp[mid])
         if q < target:
             left = bp[mid]
             a = mid + 1
@@ -85,22 +94,22 @@ def _solve_exact_sorted(t, kt, cap, target, lo, hi):
             right = bp[mid]
             b = mid - 1
     # g is linear on [left, right]
-    ql, _ = _force_and_slope(t, kt, cap, left)
-    qr, _ = _force_and_slope(t, kt, cap, right)
+    ql, _, _ = _force_and_slope(t, kt, cap, left)
+    qr, _, _ = _force_and_slope(t, kt, cap, right)
     if qr == ql:
         return left
     return left + (target - ql) * (right - left) / (qr - ql)
 
 
 @njit(cache=True)
-def _newton(t, kt, cap, target, x, r, s, lo, hi, qmax):
-    """Safeguarded Newton on the active set, from x with residual r and slope s."""
-    tol = 1e-13 * (qmax + abs(target))
+def _newton(t, kt, cap, target, x, r, s, lo, hi, qmax, qa):
+    """Safeguarded Newton on the active set, from x with residual r, slope s and force
+    scale qa = Σ |clip(t + κ x, ±c)|; qmax = Σ c bounds the residual on the bracket."""
     g_lo = -qmax - target
     g_hi = qmax - target
     side = 0
     for it in range(_MAX_NEWTON):
-        if abs(r) <= tol:
+        if abs(r) <= _RTOL * (qa + abs(target)):
             return x, it
         if r < 0:
             lo, g_lo = x, r
@@ -118,7 +127,7 @@ def _newton(t, kt, cap, target, x, r, s, lo, hi, qmax):
             if not (lo < xn < hi):
                 xn = 0.5 * (lo + hi)
         x = xn
-        q, s = _force_and_slope(t, kt, cap, x)
+        q, s, qa = _force_and_slope(t, kt, cap, x)
         r = q - target
     return _solve_exact_sorted(t, kt, cap, target, lo, hi), _MAX_NEWTON + 2
 
@@ -143,8 +152,8 @@ def solve_tangential_force(t, kt, cap, target, guess):
     """ΔV with Σ clip(t + κ ΔV, ±c) = target; assumes |target| < Σ c. Returns (ΔV, passes)."""
     qmax, lo, hi = _bracket(t, kt, cap)
     x = min(max(guess, lo), hi)
-    q, s = _force_and_slope(t, kt, cap, x)
-    dv, it = _newton(t, kt, cap, target, x, q - target, s, lo, hi, qmax)
+    q, s, qa = _force_and_slope(t, kt, cap, x)
+    dv, it = _newton(t, kt, cap, target, x, q - target, s, lo, hi, qmax, qa)
     return dv, it + 2
 
 
@@ -277,6 +286,7 @@ def drive_force_moving_limits(t, level, kn, kt, inv_kt, friction, U_path, T_path
     V = V0.copy()
     dv = np.zeros(L)
     q0 = np.empty(L)
+    qa0 = np.empty(L)
     s0 = np.empty(L)
     lo = np.empty(L)
     hi = np.empty(L)
@@ -293,6 +303,7 @@ def drive_force_moving_limits(t, level, kn, kt, inv_kt, friction, U_path, T_path
         last = k == K
         qmax = 0.0
         q0[:] = 0.0
+        qa0[:] = 0.0
         s0[:] = 0.0
         lo[:] = 0.0
         hi[:] = 0.0
@@ -329,10 +340,13 @@ def drive_force_moving_limits(t, level, kn, kt, inv_kt, friction, U_path, T_path
                 ti = t[i, p]
                 if ti >= c:
                     q0[p] += c
+                    qa0[p] += c
                 elif ti <= -c:
                     q0[p] -= c
+                    qa0[p] += c
                 else:
                     q0[p] += ti
+                    qa0[p] += abs(ti)
                     s0[p] += kei
                 b_lo = (-c - ti) * inv
                 b_hi = (c - ti) * inv
@@ -368,11 +382,11 @@ def drive_force_moving_limits(t, level, kn, kt, inv_kt, friction, U_path, T_path
                 # breakpoint between 0 and it); else the safeguarded iteration
                 r0 = q0[p] - target
                 d = 0.0 - r0 / s0[p] if s0[p] > 0.0 else np.nan
-                if abs(r0) <= 1e-13 * (qmax + abs(target)):
+                if abs(r0) <= _RTOL * (qa0[p] + abs(target)):
                     d = 0.0
                 elif not (below[p] < d < above[p]):
                     d, _ = _newton(t[:, p], ke[cur], cap[cur], target, 0.0, r0, s0[p],
-                                   lo[p], hi[p], qmax)
+                                   lo[p], hi[p], qmax, qa0[p])
                 dv[p] = d
         if live == 0:
             return  # every lane stopped
