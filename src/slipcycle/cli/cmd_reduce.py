@@ -35,6 +35,7 @@ def execute(args: argparse.Namespace) -> int:
     from slipcycle.fe.files import import_stiffness, reduce_model
     from slipcycle.fe_import import is_import_model, reduce_import
     from slipcycle.io import CaseError
+    from slipcycle.io.case import read_case
     from slipcycle.io.fe_formats import SUFFIX_FORMATS
     from slipcycle.io.results import to_jsonable
 
@@ -51,6 +52,10 @@ def execute(args: argparse.Namespace) -> int:
         return 0
     suffix = args.model.suffix.lower()
     fmt = SUFFIX_FORMATS.get(suffix)
+    if fmt is None and suffix not in (".mtx", ".npz"):
+        # a model file that is not valid TOML (is_import_model said False) is refused
+        # for itself before the --out it would be written to is looked at
+        read_case(args.model)
     if fmt not in (None, "npz"):
         raise CaseError(str(args.model), f"a {fmt} stiffness export is reduced through a "
                         "model file (model = \"fe_import\", naming it and its mesh: "

@@ -58,11 +58,25 @@ def known_tags(m, dim: int = 1) -> list[str]:
 
 
 def read_meshio(path: str | Path, key: str):
-    """``meshio.read(path)``; any failure is a :class:`CaseError` naming ``key``."""
+    """``meshio.read(path)``; any failure is a :class:`CaseError` naming ``key``.
+
+    meshio prints (a blank line on stdout with the Gmsh reader, its "Error: ..." lines on
+    stderr) and, for a file none of its readers takes, calls ``sys.exit(1)``: both are
+    kept off the command's output, and what it said goes into the one-line message.
+    """
+    import contextlib
+    import io
+
     import meshio
 
+    said = io.StringIO()
     try:
-        return meshio.read(str(path))
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            return meshio.read(str(path))
+    except SystemExit:
+        text = " ".join(said.getvalue().replace("Error:", "").split())[:200]
+        raise CaseError(key, f"cannot read mesh file {path}: "
+                        f"{text or 'no reader of meshio takes it'}") from None
     except Exception as exc:  # meshio raises many types
         text = " ".join(str(exc).split())[:200]
         if isinstance(exc, IndexError | EOFError | StopIteration) or "unexpected end" in \

@@ -3,7 +3,8 @@
 Each body's export K is read by the readers of :mod:`slipcycle.io.fe_formats` with its
 rows labelled ``(node, dof)`` (dof 1, 2, 3: global x, y, z) or, unlabelled, in the order
 x, y, z of the mesh nodes. Rows of nodes that are not in the mesh (the internal nodes that
-CalculiX adds for ``C3D8I``) and rotations are condensed out with the rest. A mesh node
+CalculiX adds for ``C3D8I``, 3 per element; rows of more such nodes are the export of
+another mesh, refused) and rotations are condensed out with the rest. A mesh node
 without rows is held at u = 0: the deck fixes it (``*BOUNDARY`` removes its rows from the
 ``.sti`` export) or the export does not hold it (a substructure's condensed nodes); a
 contact node, a clamped node or a loaded node without rows is refused.
@@ -11,7 +12,8 @@ contact node, a clamped node or a loaded node without rows is refused.
 The contact is body 1's surface ``contact``; with one body its counter-surface is rigid,
 with two each contact node of body 1 is paired with the node of body 2 at the same place
 (within ``tolerance``). Every node of a clamped set and of a set moved by a
-``displacement`` case is held (moved in its own case, at rest in the others); everything
+``displacement`` case is held (moved in its own case, at rest in the others; a force
+case all on held nodes would load nothing and is refused); everything
 else is condensed out by :func:`slipcycle.fe.contact3d.condense_contact_3d`, the engine of
 slipcycle's own 3-D reductions (one sparse factorisation, Guyan 1965), in the conventions
 stated there (Barber 2012, §3): q = q^w + A v + Bᵀ w, p = p^w + B v + C w, with the node
@@ -40,7 +42,13 @@ from slipcycle.errors import InputError
 from slipcycle.fe.contact3d import Case3D, condense_contact_3d
 from slipcycle.fe_import.mesh import ImportedMesh, read_mesh
 from slipcycle.fe_import.model import UNITS, BodySpec, ImportModel
-from slipcycle.fe_import.surface import node_areas, node_normals, pressure_forces, surface_nodes
+from slipcycle.fe_import.surface import (
+    face_areas,
+    node_areas,
+    node_normals,
+    pressure_forces,
+    surface_nodes,
+)
 from slipcycle.io.case import CaseError
 from slipcycle.io.fe_formats import detect_format, read_raw
 from slipcycle.io.fe_formats.common import StiffnessError
@@ -110,6 +118,22 @@ class ImportedJoint:
 
 def _read_export(spec: BodySpec):
     key = f"{spec.key}.stiffness"
+    if spec.stiffness.suffix.lower() == ".mas":
+        # the same layout as the .sti, so only the name tells it apart
+        raise CaseError(key, f"{spec.stiffness.name} is CalculiX's mass matrix "
+                        f"(jobname.mas); the stiffness is {spec.stiffness.stem}.sti")
+    # a K near the largest float overflows in its norms: refused below in one line, so
+    # numpy's RuntimeWarnings would only print around it
+    with np.errstate(over="ignore", invalid="ignore"):
+        raw, K, fmt = _read_checked(spec, key)
+    if K.nnz == 0 or not np.any(K.data):
+        raise CaseError(key, f"{spec.stiffness.name}: the stiffness is zero (every entry "
+                        "of K is 0)")
+    return raw, K, fmt
+
+
+def _read_checked(spec: BodySpec, key: str):
+    """The raw export, its symmetric K (CSR) and format word; errors name ``key``."""
     try:
         fmt = spec.format or detect_format(spec.stiffness)
         if fmt == "npz" or fmt == "matrix-market":
@@ -153,6 +177,16 @@ def _rows(raw, K, mesh: ImportedMesh, spec: BodySpec):
     if not own.any():
         raise CaseError(key, f"{name}: no row belongs to a node of {mesh.path.name} (first "
                         f"row: node {labels[0, 0]}); is it the export of this mesh?")
+    foreign = np.unique(labels[pos < 0, 0])
+    # C3D8I elements add 3 internal nodes each, and a few nodes come from the deck's
+    # constraints (a rigid body's rotation node); far more are the rows of another mesh,
+    # which would be condensed out silently
+    allowed = 3 * mesh.incompatible + 8 + len(mesh.labels) // 10
+    if foreign.size > allowed:
+        raise CaseError(key, f"{name} has rows of {foreign.size} nodes that "
+                        f"{mesh.path.name} does not have (first: node {foreign[0]}), more "
+                        f"than its elements and constraints can add ({allowed}: 3 internal "
+                        "nodes per C3D8I element, and a few); is it the export of this mesh?")
     return dofs, int(np.sum(pos < 0))
 
 
@@ -168,8 +202,10 @@ def _faces_named(mesh: ImportedMesh, name: str, key: str):
         raise CaseError(key, f"no surface or node set {name!r} in {mesh.path.name} "
                         f"(it has: {', '.join(known) or 'none'})")
     if table is mesh.surfaces:
-        return mesh.surfaces[hit]
+        return _on_boundary(mesh, mesh.surfaces[hit], name, key)
     nodes = mesh.node_sets[hit]
+    if nodes.size == 0:
+        raise CaseError(key, f"node set {name!r} of {mesh.path.name} is empty")
     inset = np.zeros(len(mesh.labels), bool)
     inset[nodes] = True
     faces = []
@@ -185,12 +221,41 @@ def _faces_named(mesh: ImportedMesh, name: str, key: str):
     return faces
 
 
+def _on_boundary(mesh: ImportedMesh, faces: list, name: str, key: str) -> list:
+    """``faces`` of the surface ``name``, checked: some, each on the body's outer
+    boundary (a face of two elements is inside the body, as the node-set route finds)."""
+    if not any(len(fs.nodes) for fs in faces):
+        raise CaseError(key, f"surface {name!r} of {mesh.path.name} has no faces")
+    outer = mesh.boundary_corners()
+    for fs in faces:
+        corners = np.sort(fs.nodes[:, :4 if fs.kind == "quad4" else 3], axis=1)
+        inner = [r for r, c in enumerate(map(tuple, corners)) if c not in outer]
+        if inner:
+            raise CaseError(key, f"surface {name!r}: {fs.name(inner[0], mesh.labels)} is "
+                            "inside the body (a face of two elements), not on its surface")
+    return faces
+
+
+def _check_areas(mesh: ImportedMesh, faces: list, name: str, key: str) -> None:
+    """Refuse a face of no area (coincident nodes): it has no normal and no area to give
+    its nodes."""
+    size = float(np.ptp(mesh.points, axis=0).max()) if len(mesh.points) else 0.0
+    for fs in faces:
+        area = face_areas(mesh.points, fs)
+        flat = np.flatnonzero(~(area > 1e-12 * size ** 2))
+        if flat.size:
+            raise CaseError(key, f"surface {name!r}: {fs.name(flat[0], mesh.labels)} has "
+                            f"zero area ({area[flat[0]]:.3g} m²; nodes at one place?)")
+
+
 def _set_nodes(mesh: ImportedMesh, name: str, key: str) -> np.ndarray:
-    """Nodes of the node set (or surface) ``name``."""
+    """Nodes of the node set (or surface) ``name``; an empty set is refused."""
     hit = next((k for k in mesh.node_sets if k.upper() == name.upper()), None)
-    if hit is not None:
-        return mesh.node_sets[hit]
-    return surface_nodes(_faces_named(mesh, name, key))
+    if hit is None:
+        return surface_nodes(_faces_named(mesh, name, key))
+    if mesh.node_sets[hit].size == 0:
+        raise CaseError(key, f"node set {name!r} of {mesh.path.name} is empty")
+    return mesh.node_sets[hit]
 
 
 def read_body(spec: BodySpec) -> ImportedBody:
@@ -227,6 +292,7 @@ def read_body(spec: BodySpec) -> ImportedBody:
     if extra + pad:
         K = sp.block_diag([K, sp.identity(extra + pad)], format="csr")
     faces = _faces_named(mesh, spec.contact, f"{spec.key}.contact")
+    _check_areas(mesh, faces, spec.contact, f"{spec.key}.contact")
     contact = surface_nodes(faces)
     if contact.size == 0:
         raise CaseError(f"{spec.key}.contact", f"{spec.contact!r} has no faces")
@@ -323,6 +389,35 @@ def _cases(model: ImportModel, bodies, offsets, n_all: int, fixed: np.ndarray) -
     return cases
 
 
+def _check_free_forces(model: ImportModel, cases: list, fixed: np.ndarray) -> None:
+    """Refuse a force or pressure case all of whose force lands on held dofs: a grip or
+    a clamp takes it, and the case would load nothing (its p^w, q^w exactly 0)."""
+    for ld, case in zip(model.loads, cases, strict=True):
+        if case.force is not None and not np.any(case.force[~fixed]):
+            target = f"{ld.key}.{'surface' if ld.kind == 'pressure' else 'nodes'}"
+            raise CaseError(target, f"every node that {ld.target!r} loads is held (clamped, "
+                            "or moved by a displacement case): the load goes into the "
+                            "support, and this load case puts no force on the free degrees "
+                            "of freedom")
+
+
+def _check_facing(b1: ImportedBody, b2: ImportedBody, specs, key: str) -> None:
+    """Refuse a second body whose contact is the first one's, or does not face it: the
+    two surfaces' mean outward normals must be opposite."""
+    same = (specs[0].mesh.resolve() == specs[1].mesh.resolve()
+            and specs[0].contact.upper() == specs[1].contact.upper())
+    n1 = node_normals(b1.mesh.points, b1.faces, b1.contact).mean(axis=0)
+    n2 = node_normals(b2.mesh.points, b2.faces, b2.contact).mean(axis=0)
+    cos = float(n1 @ n2 / (np.linalg.norm(n1) * np.linalg.norm(n2) or 1.0))
+    if same or cos > -0.9:
+        raise CaseError(key, f"the contact {specs[1].contact!r} of body 2 "
+                        + ("is body 1's contact itself" if same else
+                           f"does not face body 1's {specs[0].contact!r} (mean outward "
+                           f"normals at {np.degrees(np.arccos(np.clip(cos, -1, 1))):.0f}°, "
+                           "not opposite)")
+                        + ": a pair is two bodies' surfaces that touch")
+
+
 def import_joint(model: ImportModel) -> ImportedJoint:
     """Reduce the bodies of ``model`` to their contact (module docstring).
 
@@ -348,6 +443,8 @@ def import_joint(model: ImportModel) -> ImportedJoint:
     """
     bodies = [read_body(spec) for spec in model.bodies]
     b2 = bodies[1] if len(bodies) == 2 else None
+    if b2 is not None:
+        _check_facing(bodies[0], b2, model.bodies, f"{model.bodies[1].key}.contact")
     c1, c2 = _pairs(bodies[0], b2, model.tolerance, "fe_import.tolerance")
     sizes = [len(b.mesh.labels) + len(b.others) for b in bodies]
     offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int)
@@ -362,6 +459,7 @@ def import_joint(model: ImportModel) -> ImportedJoint:
     for b, spec, off in zip(bodies, model.bodies, offsets, strict=True):
         fixed[off + _held(b, spec.clamped, f"{spec.key}.clamped", "clamped")] = True
     cases = _cases(model, bodies, offsets, n_all, fixed)
+    _check_free_forces(model, cases, fixed)
     if b2 is not None and np.isin(c2, b2.contact[fixed[offsets[1] + b2.contact].any(1)]).any():
         raise CaseError("fe_import.body[1].clamped", "a contact node of body 2 is held")
     pairs = np.column_stack([c1, np.where(c2 >= 0, c2 + offsets[-1], -1)])

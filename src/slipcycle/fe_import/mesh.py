@@ -65,11 +65,24 @@ class FaceSet:
     inside : numpy.ndarray, shape (k, 3)
         A point inside the element that owns the face (its centroid), m, which tells the
         outward side.
+    owners : numpy.ndarray of int, shape (k,), or None
+        The label of the element of each face (a deck's surface), for messages.
+    side : int
+        The face number (1 for S1, ...) of a deck's surface; 0 where unknown.
     """
 
     kind: str
     nodes: np.ndarray
     inside: np.ndarray
+    owners: np.ndarray | None = None
+    side: int = 0
+
+    def name(self, row: int, labels: np.ndarray) -> str:
+        """``element 12, S2`` (a deck's face) or ``the face of nodes 3, 4, 9`` (node
+        ``labels`` of the mesh)."""
+        if self.owners is not None:
+            return f"element {int(self.owners[row])}, S{self.side}"
+        return f"the face of nodes {', '.join(str(labels[i]) for i in self.nodes[row])}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,6 +102,9 @@ class ImportedMesh:
     surfaces : dict of str to list of FaceSet
         Name → its element faces.
     path : Path
+    incompatible : int
+        The number of elements with internal nodes of their own (``C3D8I``: CalculiX adds
+        3 nodes to each, with rows in its stiffness export).
     """
 
     labels: np.ndarray
@@ -97,10 +113,18 @@ class ImportedMesh:
     node_sets: dict = field(default_factory=dict)
     surfaces: dict = field(default_factory=dict)
     path: Path = Path()
+    incompatible: int = 0
 
     def index_of(self) -> dict:
         """Node label → node index."""
         return {int(label): i for i, label in enumerate(self.labels)}
+
+    def boundary_corners(self) -> set:
+        """The sorted corner labels of every face on the body's surface (one element's)."""
+        out = set()
+        for fs in self.boundary_faces():
+            out.update(map(tuple, np.sort(fs.nodes[:, :_face_corners(fs.kind)], axis=1)))
+        return out
 
     def boundary_faces(self) -> list[FaceSet]:
         """The faces that belong to one element only (the surface of the body)."""
@@ -129,6 +153,11 @@ class ImportedMesh:
         return out
 
 
+def _face_corners(kind: str) -> int:
+    """Corner nodes of a face of ``kind`` (the first ones of its node list)."""
+    return 4 if kind == "quad4" else 3
+
+
 def _corner_count(kind: str) -> int:
     return {"tetra": 4, "tetra10": 4, "hexahedron": 8, "wedge": 6}[kind]
 
@@ -144,12 +173,28 @@ def _keyword(line: str) -> tuple[str, dict]:
     for p in parts[1:]:
         m = _PARAM.match(p)
         if m and m.group(1):
-            params[m.group(1).upper()] = (m.group(2) or "").strip()
+            # NAME="SBOTTOM": Abaqus allows a quoted value; the name is what is inside
+            params[m.group(1).upper()] = (m.group(2) or "").strip().strip("\"'")
     return parts[0].strip().upper(), params
 
 
-def _deck_lines(path: Path, key: str, depth: int = 0):
+def _include(path: Path, root: Path, inc: str, where: str, key: str) -> Path:
+    """The file of ``*INCLUDE, INPUT=inc`` met in ``path``: ccx opens a relative name from
+    the directory it runs in (the main deck's, ``root``), so that comes first; then the
+    including file's folder (a deck written for a code that resolves it there)."""
+    if Path(inc).is_absolute():
+        candidates = [Path(inc)]
+    else:
+        candidates = [root / inc, path.parent / inc]
+    for target in candidates:
+        if target.is_file():
+            return target
+    raise CaseError(key, f"{where}: *INCLUDE file {inc!r} not found")
+
+
+def _deck_lines(path: Path, key: str, depth: int = 0, root: Path | None = None):
     """(file name, line number, text) of a deck and its ``*INCLUDE`` files, comments out."""
+    root = path.parent if root is None else root
     if depth > 10:
         raise CaseError(key, f"{path.name}: *INCLUDE nested more than 10 deep")
     try:
@@ -164,10 +209,8 @@ def _deck_lines(path: Path, key: str, depth: int = 0):
             continue
         if s.upper().startswith("*INCLUDE"):
             inc = _keyword(s)[1].get("INPUT", "")
-            target = (path.parent / inc) if not Path(inc).is_absolute() else Path(inc)
-            if not target.is_file():
-                raise CaseError(key, f"{path.name}, line {no}: *INCLUDE file {inc!r} not found")
-            yield from _deck_lines(target, key, depth + 1)
+            target = _include(path, root, inc, f"{path.name}, line {no}", key)
+            yield from _deck_lines(target, key, depth + 1, root)
             continue
         yield path.name, no, s
 
@@ -179,24 +222,44 @@ def _numbers(tokens, where: str, key: str, kind=int) -> list:
         raise CaseError(key, f"{where}: expected numbers, got {', '.join(tokens)!r}") from None
 
 
+def _rotation(axis_a, axis_b, degrees: float, where: str, key: str) -> np.ndarray:
+    """The matrix of a right-handed rotation by ``degrees`` about the axis a → b."""
+    n = np.asarray(axis_b, float) - np.asarray(axis_a, float)
+    if not np.linalg.norm(n) > 0.0:
+        raise CaseError(key, f"{where}: the rotation axis has two equal points a = b")
+    n = n / np.linalg.norm(n)
+    t = np.radians(degrees)
+    cross = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
+    return np.cos(t) * np.eye(3) + np.sin(t) * cross + (1 - np.cos(t)) * np.outer(n, n)
+
+
 class _Deck:
     """The state of a deck scan (labels, elements, sets, surfaces by label)."""
 
     def __init__(self, key: str):
         self.key = key
         self.nodes: dict[int, list] = {}
+        self.node_where: dict[int, str] = {}
         self.elements: dict[int, tuple[str, list]] = {}
         self.nsets: dict[str, list] = {}
         self.elsets: dict[str, list] = {}
-        self.surfaces: dict[str, list] = {}
+        self.surfaces: dict[str, dict] = {}
         self.pending: list = []            # element being continued over lines
+        self.part: str | None = None       # the *PART being read (Abaqus assemblies)
+        self.part_nodes: dict[str, list] = {}
+        self.instance: dict = {}           # the *INSTANCE being read: part, data lines
+        self.placed: set = set()
 
     def members(self, table: dict, tokens, generate: bool, where: str) -> list:
         if generate:
             a = _numbers(tokens, where, self.key)
             if len(a) not in (2, 3):
                 raise CaseError(self.key, f"{where}: GENERATE needs first, last[, step]")
-            return list(range(a[0], a[1] + 1, a[2] if len(a) == 3 else 1))
+            step = a[2] if len(a) == 3 else 1
+            if step < 1 or a[1] < a[0]:
+                raise CaseError(self.key, f"{where}: GENERATE {', '.join(map(str, a))} "
+                                "names no label (it needs first <= last and a step >= 1)")
+            return list(range(a[0], a[1] + 1, step))
         out = []
         for t in tokens:
             if not t:
@@ -209,6 +272,120 @@ class _Deck:
                 raise CaseError(self.key, f"{where}: unknown set {t!r}")
         return out
 
+    def keyword(self, mode: str, params: dict, where: str) -> None:
+        """Start a keyword block: check the element type, open sets, parts, instances."""
+        if mode == "ELEMENT":
+            word = params.get("TYPE", "").upper()
+            if word not in ELEMENT_KINDS:
+                raise CaseError(self.key, f"{where}: element type {word or '(none)'} is not "
+                                "a solid element slipcycle reads (" +
+                                ", ".join(ELEMENT_KINDS) + ")")
+        elif mode in ("NSET", "ELSET"):
+            # an *NSET with no data lines is a set, an empty one (refused where used)
+            (self.nsets if mode == "NSET" else self.elsets).setdefault(
+                params.get(mode, "").upper(), [])
+        elif mode == "PART":
+            self.part = params.get("NAME", "").upper()
+            self.part_nodes.setdefault(self.part, [])
+        elif mode == "END PART":
+            self.part = None
+        elif mode == "INSTANCE":
+            self.instance = {"part": params.get("PART", "").upper(), "lines": [],
+                             "where": where}
+        elif mode == "END INSTANCE":
+            self.place()
+
+    def node(self, vals: list, where: str, params: dict) -> None:
+        if len(vals) < 3 or vals[0] != int(vals[0]):
+            raise CaseError(self.key, f"{where}: a node line is label, x, y[, z]")
+        label, xyz = int(vals[0]), (vals[1:4] + [0.0])[:3]
+        if not np.all(np.isfinite(xyz)):
+            raise CaseError(self.key, f"{where}: node {label} has a coordinate that is not "
+                            f"a finite number ({', '.join(map(str, xyz))})")
+        if label in self.nodes and self.nodes[label] != xyz:
+            raise CaseError(self.key, f"{where}: node {label} is defined a second time at "
+                            f"another place (first: {self.node_where[label]}): which one "
+                            "is meant is ambiguous")
+        self.nodes[label], self.node_where[label] = xyz, where
+        if self.part is not None:
+            self.part_nodes[self.part].append(label)
+        if "NSET" in params:
+            self.nsets.setdefault(params["NSET"].upper(), []).append(label)
+
+    def element(self, tokens, where: str, params: dict) -> None:
+        word = params["TYPE"].upper()
+        self.pending += _numbers(tokens, where, self.key)
+        need = _NODES_PER[ELEMENT_KINDS[word]] + 1
+        if len(self.pending) < need:
+            return
+        label = self.pending[0]
+        if len(self.pending) > need:
+            raise CaseError(self.key, f"{where}: element {label} has "
+                            f"{len(self.pending) - 1} nodes; {word} has {need - 1}")
+        if label in self.elements:
+            raise CaseError(self.key, f"{where}: element {label} is defined a second time "
+                            "(element labels must be unique)")
+        self.elements[label] = (word, self.pending[1:])
+        if "ELSET" in params:
+            self.elsets.setdefault(params["ELSET"].upper(), []).append(label)
+        self.pending = []
+
+    def surface(self, tokens, where: str, params: dict, s: str) -> None:
+        sname = params.get("NAME", "").upper()
+        if params.get("TYPE", "ELEMENT").upper() == "NODE":
+            self.nsets.setdefault(sname, []).extend(
+                self.members(self.nsets, tokens[:1], False, where))
+            return
+        face = tokens[1].upper() if len(tokens) > 1 else ""
+        if not re.fullmatch(r"S[1-6]", face):
+            raise CaseError(self.key, f"{where}: a surface line is 'element or elset, "
+                            f"S1..S6', got {s!r}")
+        els = self.members(self.elsets, tokens[:1], False, where)
+        # a surface is a set of faces: a face named twice (in one block or in two blocks
+        # of one name) is one face, or its area would count twice
+        faces = self.surfaces.setdefault(sname, {})
+        faces.update(dict.fromkeys((e, int(face[1]) - 1) for e in els))
+
+    def place(self) -> None:
+        """Move the nodes of the instanced part: Abaqus translates them by the first data
+        line, then rotates them about the axis a → b of the second (a, b, angle in
+        degrees; keyword reference, *INSTANCE)."""
+        inst, self.instance = self.instance, {}
+        lines, where = inst.get("lines", []), inst.get("where", "")
+        if not lines:
+            return
+        part = inst["part"]
+        if part in self.placed:
+            raise CaseError(self.key, f"{where}: a second *INSTANCE of part {part}: "
+                            "slipcycle reads one instance of each part")
+        self.placed.add(part)
+        if len(lines[0]) != 3 or (len(lines) > 1 and len(lines[1]) != 7) or len(lines) > 2:
+            raise CaseError(self.key, f"{where}: *INSTANCE data are a translation "
+                            "(x, y, z) and a rotation (a, b, angle in degrees)")
+        rot = (_rotation(lines[1][:3], lines[1][3:6], lines[1][6], where, self.key)
+               if len(lines) > 1 else None)
+        for label in self.part_nodes.get(part, []):
+            x = np.asarray(self.nodes[label], float) + lines[0]
+            if rot is not None:
+                x = np.asarray(lines[1][:3]) + rot @ (x - np.asarray(lines[1][:3]))
+            self.nodes[label] = x.tolist()
+
+    def data(self, mode: str, params: dict, s: str, where: str) -> None:
+        """One data line of the block ``mode``."""
+        tokens = [t.strip() for t in s.split(",")]
+        if mode == "NODE":
+            self.node(_numbers(tokens, where, self.key, float), where, params)
+        elif mode == "ELEMENT":
+            self.element(tokens, where, params)
+        elif mode in ("NSET", "ELSET"):
+            table = self.nsets if mode == "NSET" else self.elsets
+            table.setdefault(params.get(mode, "").upper(), []).extend(
+                self.members(table, tokens, "GENERATE" in params, where))
+        elif mode == "SURFACE":
+            self.surface(tokens, where, params, s)
+        elif mode == "INSTANCE" and self.instance:
+            self.instance["lines"].append(_numbers(tokens, where, self.key, float))
+
 
 def read_deck(path: Path, key: str, scale: float = 1.0) -> ImportedMesh:
     """Scan an Abaqus/CalculiX deck (module docstring); errors name ``key`` and the line."""
@@ -218,52 +395,9 @@ def read_deck(path: Path, key: str, scale: float = 1.0) -> ImportedMesh:
         where = f"{name}, line {no}"
         if s.startswith("*"):
             mode, params = _keyword(s)
-            if mode == "ELEMENT":
-                word = params.get("TYPE", "").upper()
-                if word not in ELEMENT_KINDS:
-                    raise CaseError(key, f"{where}: element type {word or '(none)'} is not a "
-                                    "solid element slipcycle reads (" +
-                                    ", ".join(ELEMENT_KINDS) + ")")
-            continue
-        tokens = [t.strip() for t in s.split(",")]
-        if mode == "NODE":
-            vals = _numbers(tokens, where, key, float)
-            if len(vals) < 3 or vals[0] != int(vals[0]):
-                raise CaseError(key, f"{where}: a node line is label, x, y[, z]")
-            d.nodes[int(vals[0])] = (vals[1:4] + [0.0])[:3]
-            if "NSET" in params:
-                d.nsets.setdefault(params["NSET"].upper(), []).append(int(vals[0]))
-        elif mode == "ELEMENT":
-            word = params["TYPE"].upper()
-            d.pending += _numbers(tokens, where, key)
-            need = _NODES_PER[ELEMENT_KINDS[word]] + 1
-            if len(d.pending) >= need:
-                if len(d.pending) > need:
-                    raise CaseError(key, f"{where}: element {d.pending[0]} has "
-                                    f"{len(d.pending) - 1} nodes; {word} has {need - 1}")
-                d.elements[d.pending[0]] = (word, d.pending[1:])
-                if "ELSET" in params:
-                    d.elsets.setdefault(params["ELSET"].upper(), []).append(d.pending[0])
-                d.pending = []
-        elif mode == "NSET":
-            d.nsets.setdefault(params.get("NSET", "").upper(), []).extend(
-                d.members(d.nsets, tokens, "GENERATE" in params, where))
-        elif mode == "ELSET":
-            d.elsets.setdefault(params.get("ELSET", "").upper(), []).extend(
-                d.members(d.elsets, tokens, "GENERATE" in params, where))
-        elif mode == "SURFACE":
-            sname = params.get("NAME", "").upper()
-            typ = params.get("TYPE", "ELEMENT").upper()
-            if typ == "NODE":
-                d.nsets.setdefault(sname, []).extend(d.members(d.nsets, tokens[:1], False,
-                                                               where))
-            else:
-                face = tokens[1].upper() if len(tokens) > 1 else ""
-                if not re.fullmatch(r"S[1-6]", face):
-                    raise CaseError(key, f"{where}: a surface line is 'element or elset, "
-                                    f"S1..S6', got {s!r}")
-                els = d.members(d.elsets, tokens[:1], False, where)
-                d.surfaces.setdefault(sname, []).extend((e, int(face[1]) - 1) for e in els)
+            d.keyword(mode, params, where)
+        else:
+            d.data(mode, params, s, where)
     if d.pending:
         raise CaseError(key, f"{path.name}: the last element is incomplete (truncated deck?)")
     return _deck_mesh(d, path, key, scale)
@@ -291,28 +425,35 @@ def _deck_mesh(d: _Deck, path: Path, key: str, scale: float) -> ImportedMesh:
         where_el[e] = (kind, len(lst))
         lst.append([idx(n, f"element {e}") for n in conn])
     cells = {k: np.array(v, np.int64) for k, v in cells.items()}
-    nsets = {n: np.unique([idx(lab, f"*NSET {n}") for lab in v]) for n, v in d.nsets.items()}
-    surfaces = {}
-    for name, faces in d.surfaces.items():
-        groups: dict = {}
-        for e, f in faces:
-            if e not in where_el:
-                raise CaseError(key, f"{path.name}: *SURFACE {name} names element {e}, "
-                                "which has no *ELEMENT line")
-            kind, row = where_el[e]
-            if f >= len(FACES[kind]):
-                raise CaseError(key, f"{path.name}: *SURFACE {name}: element {e} has no "
-                                f"face S{f + 1}")
-            groups.setdefault((kind, f), []).append(row)
-        surfaces[name] = [_faceset(points, cells[kind], rows, FACES[kind][f], kind)
-                          for (kind, f), rows in groups.items()]
-    return ImportedMesh(labels, points, cells, nsets, surfaces, path)
+    nsets = {n: np.unique(np.array([idx(lab, f"*NSET {n}") for lab in v], np.int64))
+             for n, v in d.nsets.items()}
+    surfaces = {name: _deck_surface(name, faces, where_el, points, cells, path, key)
+                for name, faces in d.surfaces.items()}
+    incompatible = sum(word == "C3D8I" for word, _ in d.elements.values())
+    return ImportedMesh(labels, points, cells, nsets, surfaces, path, incompatible)
 
 
-def _faceset(points, conn, rows, local, kind) -> FaceSet:
+def _deck_surface(name, faces, where_el, points, cells, path, key) -> list:
+    """The :class:`FaceSet` list of the surface ``name`` ((element label, face) pairs)."""
+    groups: dict = {}
+    for e, f in faces:
+        if e not in where_el:
+            raise CaseError(key, f"{path.name}: *SURFACE {name} names element {e}, "
+                            "which has no *ELEMENT line")
+        kind, row = where_el[e]
+        if f >= len(FACES[kind]):
+            raise CaseError(key, f"{path.name}: *SURFACE {name}: element {e} has no "
+                            f"face S{f + 1}")
+        groups.setdefault((kind, f), []).append((row, e))
+    return [_faceset(points, cells[kind], [r for r, _ in rows], FACES[kind][f], kind,
+                     np.array([e for _, e in rows], np.int64), f + 1)
+            for (kind, f), rows in groups.items()]
+
+
+def _faceset(points, conn, rows, local, kind, owners=None, side=0) -> FaceSet:
     c = conn[np.asarray(rows)]
     return FaceSet(face_kind(len(local)), c[:, list(local)],
-                   points[c[:, :_corner_count(kind)]].mean(axis=1))
+                   points[c[:, :_corner_count(kind)]].mean(axis=1), owners, side)
 
 
 # -- any mesh meshio reads ------------------------------------------------------------------
@@ -356,6 +497,11 @@ def read_mesh(path: Path, key: str, scale: float = 1.0) -> ImportedMesh:
     points = np.asarray(m.points, float)
     if points.shape[1] != 3:
         raise CaseError(key, f"{path.name} has {points.shape[1]}-D points; need x, y, z")
+    bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
+    if bad.size:
+        raise CaseError(key, f"{path.name}: node {bad[0] + 1} (point {bad[0]} of the "
+                        f"file) has a coordinate that is not a finite number "
+                        f"({', '.join(map(str, points[bad[0]]))})")
     points = points * scale
     mesh = ImportedMesh(np.arange(1, len(points) + 1), points, cells,
                         {k: np.unique(np.asarray(v, np.int64))
@@ -384,7 +530,9 @@ def _with_meshio_surfaces(mesh: ImportedMesh, m) -> ImportedMesh:
                 if key in lookup:
                     fs, row = lookup[key]
                     groups.setdefault(id(fs), (fs, []))[1].append(row)
-        surfaces[name] = [FaceSet(fs.kind, fs.nodes[rows], fs.inside[rows])
+        # a cell listed twice is one face (a surface is a set of faces)
+        surfaces[name] = [FaceSet(fs.kind, fs.nodes[np.unique(rows)],
+                                  fs.inside[np.unique(rows)])
                           for fs, rows in groups.values()]
     return ImportedMesh(mesh.labels, mesh.points, mesh.cells, mesh.node_sets, surfaces,
                         mesh.path)

@@ -144,6 +144,10 @@ def _names(sec: Section, key: str) -> tuple:
 
 
 def _body(b: Section) -> BodySpec:
+    for name in ("stiffness", "mesh"):
+        if b.has(name) and isinstance(b.raw(name), str) and not b.raw(name).strip():
+            # an empty name would resolve to the model file's folder ("is a directory")
+            raise b.error(name, "is empty: name the file")
     fmt = b.string("format", None, choices=FORMATS) if b.has("format") else None
     spec = BodySpec(stiffness=b.path("stiffness"), mesh=b.path("mesh"),
                     contact=b.string("contact"), clamped=_names(b, "clamped"),

@@ -24,7 +24,7 @@ import numpy as np
 
 from slipcycle.fe_import.mesh import FaceSet
 
-__all__ = ["surface_nodes", "node_normals", "node_areas", "pressure_forces"]
+__all__ = ["surface_nodes", "node_normals", "node_areas", "pressure_forces", "face_areas"]
 
 _TRI_PTS = np.array([[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]])
 _TRI_W = np.full(3, 1 / 6)
@@ -63,6 +63,11 @@ def _area_vectors(points: np.ndarray, fs: FaceSet) -> tuple[np.ndarray, np.ndarr
     centre = X.mean(axis=1)
     sign = np.sign(np.einsum("kd,kd->k", a.sum(axis=1), centre - fs.inside))
     return N, a * np.where(sign == 0, 1.0, sign)[:, None, None]
+
+
+def face_areas(points: np.ndarray, fs: FaceSet) -> np.ndarray:
+    """Area (k,), m², of each face of ``fs`` (Gauss quadrature of |x_ξ × x_η|)."""
+    return np.linalg.norm(_area_vectors(points, fs)[1], axis=2).sum(axis=1)
 
 
 def surface_nodes(facesets: list[FaceSet]) -> np.ndarray:
