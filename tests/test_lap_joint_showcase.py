@@ -45,6 +45,7 @@ def test_one_command_writes_the_report_with_its_tables_and_figures(showcase_cli)
     for head in ("## Protocols", "## Bolt forces", "## Mesh convergence",
                  "## B = 0: one answer for every protocol", "## Shakedown window"):
         assert head in report, head
+    assert "Elastic bolts, k_b = " in report and " N/m;" in report   # the unit as written
     for name in ("fit_up", "overload", "sequential", "simultaneous"):
         assert f"| {name} |" in report
     for i in (0, 1):

@@ -119,6 +119,9 @@ def test_cli_shakedown_lap_joint_lambda2_is_confirmed_by_the_engine(lap_cli):
 
     s = lap_cli
     assert s["model"] == "lap_joint"
+    # λ of a lap joint is the service amplitude: every amplitude is in newtons
+    for key in ("lambda2", "lambda1_bracket", "class_window", "shakedown_limits", "lam_max"):
+        assert s["units"][key] == "N", key
     assert s["subjects"] == ["simultaneous", "safe state (simultaneous)"]
     subjects, run = lap_joint_subjects(parse_case_text(_lap_text()))
     sub = subjects[0]
@@ -139,7 +142,9 @@ def test_cli_shakedown_lap_joint_lambda2_is_confirmed_by_the_engine(lap_cli):
 
 
 @pytest.mark.parametrize("argv, key", [(["--random", "3"], "--random"),
-                                       (["--grid", "5"], "--grid")])
+                                       (["--grid", "5"], "--grid"),
+                                       (["--seed", "3"], "--seed"),
+                                       (["--lam", "-1"], "--lam")])
 def test_cli_basins_lap_joint_refuses_start_options_in_one_line(argv, key, run_cli,
                                                                  tmp_path, write_case):
     case = write_case(_lap_text())

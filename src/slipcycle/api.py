@@ -149,6 +149,10 @@ def as_case(case: Any, overrides: Mapping[str, Any] | None = None) -> Case:
         base = parse_case_text(toml_text(case), None, models)
     else:
         raise TypeError(f"not a case: {type(case).__name__}")
+    if overrides is not None and not isinstance(overrides, Mapping):
+        raise TypeError("overrides must be a mapping of dotted keys to values, e.g. "
+                        "{'lap_joint.friction': 0.25}, not "
+                        f"{type(overrides).__name__} {overrides!r}")
     if not overrides:
         return base
     data = apply_overrides(base.data, dict(overrides))

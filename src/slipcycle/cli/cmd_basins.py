@@ -28,6 +28,7 @@ its runs go one after another in this process: no ``--workers``, ``--scheduler``
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from slipcycle.cli.common import (
@@ -55,7 +56,7 @@ def add_parser(sub) -> None:
     p.add_argument("--v1", default=None, help="grid range a:b of v1 [m]")
     p.add_argument("--v2", default=None, help="grid range a:b of v2 [m]")
     p.add_argument("--lam", type=float, default=None, help="load factor λ (overrides case)")
-    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
     add_common(p)
     p.set_defaults(execute=execute)
 
@@ -68,13 +69,15 @@ def execute(args: argparse.Namespace) -> int:
         from slipcycle.io import CaseError
         from slipcycle.joints.lap_joint_shakedown import lap_joint_shakedown_study
 
-        for key in ("grid", "random", "protocols", "v1", "v2"):
+        for key in ("grid", "random", "protocols", "v1", "v2", "seed"):
             if getattr(args, key) is not None:
                 raise CaseError(f"--{key}", "a lap_joint case maps its protocols of "
                                             "[lap_joint.protocols] over the service "
                                             "amplitude (--lam: the largest)")
         refuse_sweep_options(args, "a lap_joint basins map",
                              "discrete and discrete3d cases")
+        if args.lam is not None and not (math.isfinite(args.lam) and args.lam > 0):
+            raise CaseError("--lam", f"must be a service amplitude > 0 N, got {args.lam}")
         status = lap_joint_shakedown_study(case, args.out, lam_max=args.lam)
         return finish_study(status, args, case, ("subjects", "lambda2", "class_window",
                                                  "shakedown_limits"))
@@ -83,7 +86,7 @@ def execute(args: argparse.Namespace) -> int:
 
         status = basins3d_study(case, args.out, grid=args.grid, random=args.random,
                                 protocols=args.protocols, v1_range=args.v1,
-                                v2_range=args.v2, lam=args.lam, seed=args.seed,
+                                v2_range=args.v2, lam=args.lam, seed=args.seed or 0,
                                 **study_options(args))
         return finish_study(status, args, case, ("starts", "class_counts", "attractors",
                                                  "both_outcomes"))
@@ -91,6 +94,6 @@ def execute(args: argparse.Namespace) -> int:
 
     status = basins_study(case, args.out, grid=args.grid, random=args.random,
                           protocols=args.protocols, v1_range=args.v1, v2_range=args.v2,
-                          lam=args.lam, seed=args.seed, **study_options(args))
+                          lam=args.lam, seed=args.seed or 0, **study_options(args))
     return finish_study(status, args, case, ("starts", "class_counts", "both_outcomes",
                                              "lambda1", "lambda2"))

@@ -49,7 +49,7 @@ def execute(args: argparse.Namespace) -> int:
     log.info("case %s (model %s) read in %s", args.case, case.model, clock)
     workers = args.workers
     if not takes_workers(case.model):
-        if workers is not None:
+        if workers is not None and workers != 1:   # one process is what it gets anyway
             raise CaseError("--workers", f"a {case.model} case is one simulation; "
                                          "--workers is for lap_joint cases (their "
                                          "protocol runs)")

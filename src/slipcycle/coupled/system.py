@@ -60,7 +60,10 @@ class CoupledSystem:
 
     def _ill_posed_nodes(self, fc) -> str:
         """The nodes (and what else the model reports) of the critical combination."""
-        return f"nodes {list(fc.nodes)}"
+        nodes = [int(j) for j in fc.nodes]
+        if len(nodes) > 8:      # one line: the first nodes and how many there are
+            return f"nodes {nodes[:8]} … ({len(nodes)} in all)"
+        return f"nodes {nodes}"
 
     def _check_well_posed(self) -> None:
         """Refuse f ≥ f_crit (Klarbring's P-matrix condition), keyed ``friction``, with the

@@ -416,11 +416,12 @@ def doubling_error(x0, r0, xf, rf, x1, r1, x2, r2, n):  # pragma: no cover - com
 
 
 @njit(cache=True, nogil=True)
-def book_step(x0, r0, x1, r1, drw, modes, dissipation, slip_length, separated,
+def book_step(x0, r0, x1, r1, drw, modes, f, dissipation, slip_length, separated,
               slipped):  # pragma: no cover - compiled
     """Bookkeeping of a committed step (``Evolution3D._commit``): adds each node's
-    dissipation −½(q⁰ + q¹)·Δv [J] and, for a slipping node, its slip length |Δv| [m];
-    flags separated and slipping nodes.
+    dissipation −½(q⁰ + q¹)·Δv [J] (none at a frictionless node, f_j = 0, whose q is
+    zero up to round-off) and, for a slipping node, its slip length |Δv| [m]; flags
+    separated and slipping nodes.
 
     Returns
     -------
@@ -440,7 +441,8 @@ def book_step(x0, r0, x1, r1, drw, modes, dissipation, slip_length, separated,
     for j in range(n):
         a, b, k = 2 * j, 2 * j + 1, 2 * n + j
         d1, d2 = x1[a] - x0[a], x1[b] - x0[b]
-        dissipation[j] -= 0.5 * (r0[a] + r1[a]) * d1 + 0.5 * (r0[b] + r1[b]) * d2
+        if f[j] > 0.0:
+            dissipation[j] -= 0.5 * (r0[a] + r1[a]) * d1 + 0.5 * (r0[b] + r1[b]) * d2
         normal_work += 0.5 * (r0[k] + r1[k]) * (x1[k] - x0[k])
         if modes[j] == 1:
             slip_length[j] += np.sqrt(d1 * d1 + d2 * d2)

@@ -87,8 +87,13 @@ def _matrices(case: Case, sec: Section) -> tuple[dict, dict]:
         return vals, {k: f"{key} (matrix {k})" for k in ("A", "B", "C")}
     C = sec.array("C", shape=(None, None))
     n = C.shape[0]
-    A = sec.array("A", shape=(2 * n, 2 * n))
-    B = sec.array("B", shape=(n, 2 * n))
+    try:
+        A = sec.array("A", shape=(2 * n, 2 * n))
+        B = sec.array("B", shape=(n, 2 * n))
+    except CaseError as exc:
+        # C fixes the node count: a mismatch may as well be C's fault, so say where N is from
+        raise CaseError(exc.key, f"{exc.problem} (N = {n} nodes, from the {n}×{n} C)") \
+            from None
     return ({"A": A, "B": B, "C": C, "coordinates": None, "normals": None, "tangents": None,
              "loads": {}}, {k: sec.key(k) for k in ("A", "B", "C")})
 
@@ -226,8 +231,14 @@ def discrete3d_case(system: FrictionalSystem3D, load: Load3D, run: Mapping | Non
     -------
     Discrete3DCase
     """
-    if protocol is not None and len(protocol) and isinstance(protocol[0], Step):
+    if protocol is not None and not len(protocol):
+        raise InputError("protocol", "needs at least one load state or step (None: plain "
+                                     "loading)")
+    if protocol is not None and isinstance(protocol[0], Step):
         protocol = assembly_states(protocol, load)
+    for name, value in (("initial_slip", initial_slip), ("protocol", protocol)):
+        if value is not None and not np.all(np.isfinite(np.asarray(value, float))):
+            raise InputError(name, "must contain only finite numbers (found nan or inf)")
     return Discrete3DCase(system, load, RunSettings.of(run, RUN_DEFAULTS),
                           None if initial_slip is None else np.asarray(initial_slip, float),
                           None if protocol is None else np.asarray(protocol, float),

@@ -984,7 +984,7 @@ class Evolution3D:
         x0, r0 = self.x, self.r
         if t is not None:
             work, normal_work, none_stuck = book_step(
-                x0, r0, step.x, step.r, step.drw, step.modes, t.dissipation,
+                x0, r0, step.x, step.r, step.drw, step.modes, self.solver.f, t.dissipation,
                 t.slip_length, t.separated, t.slipped)
             t.work += work
             t.normal_work += normal_work

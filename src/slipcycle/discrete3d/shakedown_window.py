@@ -42,6 +42,9 @@ from slipcycle.result import STEADY_STATES, StudyResult
 __all__ = ["Subject", "ShakedownWindow3D", "shakedown_window", "check_window_options",
            "SUMMARY_UNITS"]
 
+#: the most load factors of one window (each is a run to the steady state per start)
+MAX_LAM_POINTS = 10_000
+
 SUMMARY_UNITS = {"lambda2": "1", "lambda1_bracket": "1", "class_window": "1",
                  "shakedown_limits": "1", "lam_max": "1", "n_nodes": "1",
                  "wall_time_s": "s"}
@@ -73,8 +76,10 @@ def check_window_options(lam_max: float | None, lam_points: int, lam_tol: float)
     """Refuse a bad ``--lam-max``, ``--lam-points`` or ``--lam-tol`` (CaseError)."""
     if lam_max is not None and not (np.isfinite(lam_max) and lam_max > 0):
         raise CaseError("--lam-max", f"must be a finite number > 0, got {lam_max}")
-    if lam_points < 2:
-        raise CaseError("--lam-points", f"must be >= 2, got {lam_points}")
+    if not 2 <= lam_points <= MAX_LAM_POINTS:
+        raise CaseError("--lam-points", f"must be in 2 … {MAX_LAM_POINTS} (each point is a "
+                                        f"run to the steady state per start), got "
+                                        f"{lam_points}")
     if not (np.isfinite(lam_tol) and 0 < lam_tol <= 1):
         raise CaseError("--lam-tol", f"must be in (0, 1], got {lam_tol}")
 
@@ -189,6 +194,8 @@ class ShakedownWindow3D(StudyResult):
 
     model: ClassVar[str] = "discrete3d"
     analysis: ClassVar[str] = "shakedown"
+    #: the unit of λ and of every amplitude derived from it (a load factor here)
+    lam_unit: ClassVar[str] = "1"
 
     labels: tuple
     n_nodes: int
@@ -211,9 +218,10 @@ class ShakedownWindow3D(StudyResult):
         return (a, b) if a <= b else None
 
     def headline(self) -> list[tuple]:
-        return [("lambda2", self.lambda2.tolist(), "1"),
-                ("lambda1_bracket", list(self.lambda1_bracket), "1"),
-                ("class_window", self.class_window, "1"),
+        u = self.lam_unit
+        return [("lambda2", self.lambda2.tolist(), u),
+                ("lambda1_bracket", list(self.lambda1_bracket), u),
+                ("class_window", self.class_window, u),
                 ("wall_time_s", self.wall_time_s, "s")]
 
     def summary(self) -> dict:
@@ -230,7 +238,13 @@ class ShakedownWindow3D(StudyResult):
                 "class_window": None if window is None else list(window),
                 "shakedown_limits": lim, "lam_max": float(self.lam[-1]),
                 "steady_state_codes": list(STEADY_STATES),
-                "wall_time_s": self.wall_time_s, "units": dict(SUMMARY_UNITS)}
+                "wall_time_s": self.wall_time_s, "units": self.units()}
+
+    def units(self) -> dict:
+        """The summary's units: :data:`SUMMARY_UNITS` with λ's in :attr:`lam_unit`."""
+        lam_keys = ("lambda2", "lambda1_bracket", "class_window", "shakedown_limits",
+                    "lam_max")
+        return {k: self.lam_unit if k in lam_keys else u for k, u in SUMMARY_UNITS.items()}
 
     def _build_dataset(self) -> xr.Dataset:
         """Class and dissipation over (subject, lam); λ2 and the limits per subject."""
@@ -239,10 +253,12 @@ class ShakedownWindow3D(StudyResult):
             {"steady_state": (("subject", "lam"), self.steady_state, {"units": "1"}),
              "dissipation_per_cycle": (("subject", "lam"), self.dissipation_per_cycle,
                                        {"units": "J"}),
-             "lambda2": (("subject",), self.lambda2, {"units": "1"}),
-             "shakedown_limit_lo": (("subject",), self.limits[:, 0], {"units": "1"}),
-             "shakedown_limit_hi": (("subject",), self.limits[:, 1], {"units": "1"})},
-            coords={"subject": sub, "lam": ("lam", self.lam, {"units": "1"})})
+             "lambda2": (("subject",), self.lambda2, {"units": self.lam_unit}),
+             "shakedown_limit_lo": (("subject",), self.limits[:, 0],
+                                    {"units": self.lam_unit}),
+             "shakedown_limit_hi": (("subject",), self.limits[:, 1],
+                                    {"units": self.lam_unit})},
+            coords={"subject": sub, "lam": ("lam", self.lam, {"units": self.lam_unit})})
 
     def figures(self, dataset: xr.Dataset | None = None) -> dict:
         """``shakedown_map``: class of every start over λ, with λ2 and the limits."""

@@ -126,6 +126,9 @@ __all__ = ["LapJoint", "LapJointModel", "LapJointMesh", "LapJointFE", "lap_joint
 #: needs (those of quadratic triangles vanish at the vertices): linear tetrahedra and
 #: hexahedra with incompatible modes (bilinear faces)
 _ELEMENTS = ("P1", "H8I")
+#: largest ratio of the two plates' moduli (E_lower / E or its inverse; steel on a polymer
+#: is about 100; 1e14 made the reduction singular)
+MODULUS_RATIO = 1e6
 
 
 @dataclass(frozen=True)
@@ -229,14 +232,16 @@ class LapJoint:
         if self.layers is not None:
             check_number("layers", self.layers, ge=1, le=200, integer=True)
         check_number("refine", self.refine, ge=0, le=3, integer=True)
-        if self.E_lower is not None:
-            check_number("E_lower", self.E_lower, gt=0.0)
         if self.nu_lower is not None:
             check_number("nu_lower", self.nu_lower, ge=0.0, lt=0.5)
-        check_number("bolt_modulus", self.bolt_modulus, ge=0.0)
+        self._check_moduli()
         for name in ("bolt_shank_diameter", "bolt_length"):
             if getattr(self, name) is not None:
                 check_number(name, getattr(self, name), gt=0.0)
+                if not self.bolt_modulus:
+                    raise InputError(name, "describes an elastic bolt shank: give "
+                                     "bolt_modulus > 0 too (0 is a constant-force bolt, "
+                                     "which has no shank)")
         if self.bolt_shank_diameter is not None and \
                 self.bolt_shank_diameter > self.bolt_diameter:
             raise InputError("bolt_shank_diameter", "must not exceed the hole diameter "
@@ -276,6 +281,19 @@ class LapJoint:
                              f"washers: end_relief < {self.edge_distance:g} m (washer rim to "
                              f"plate end), got {self.end_relief:g}")
         self._check_size()
+
+    def _check_moduli(self) -> None:
+        """The lower plate's modulus within ``MODULUS_RATIO`` of the upper one's (beyond
+        it the reduced stiffness is singular to double precision), and the bolts' ≥ 0."""
+        check_number("bolt_modulus", self.bolt_modulus, ge=0.0)
+        if self.E_lower is None:
+            return
+        check_number("E_lower", self.E_lower, gt=0.0)
+        ratio = self.E_lower / self.E
+        if not 1.0 / MODULUS_RATIO <= ratio <= MODULUS_RATIO:
+            raise InputError("E_lower", f"must lie within a factor {MODULUS_RATIO:g} of E "
+                             f"({self.E:g} Pa: beyond it the reduction of the softer plate "
+                             f"is singular to double precision), got {self.E_lower:g} Pa")
 
     def _check_size(self) -> None:
         """Refuse, before meshing, a mesh whose estimated memory exceeds the budget

@@ -194,6 +194,9 @@ class Section:
         """Convert an already-read value to a checked float array (see :meth:`array`)."""
         if raw is None:
             return None  # type: ignore[return-value]
+        if _holds_bool(raw):
+            # NumPy reads true as 1.0: a switch where a number goes is a mistake, not a 1
+            raise self.error(key, f"must contain numbers, not true or false, got {raw!r}")
         try:
             arr = np.asarray(raw, dtype=float)
         except (TypeError, ValueError):
@@ -254,6 +257,15 @@ class Section:
         if not isinstance(raw, list) or not all(isinstance(t, dict) for t in raw):
             raise self.error(key, "must be an array of tables ([[...]] in TOML)")
         return [Section(t, f"{self.key(key)}[{i}]", self.base_dir) for i, t in enumerate(raw)]
+
+
+def _holds_bool(raw: Any) -> bool:
+    """Whether ``raw`` is a bool or a (nested) list or tuple holding one."""
+    if isinstance(raw, bool | np.bool_):
+        return True
+    if isinstance(raw, list | tuple):
+        return any(_holds_bool(item) for item in raw)
+    return False
 
 
 def _check_bounds(section: Section, key: str, arr: np.ndarray, gt, ge, lt, le) -> None:

@@ -35,15 +35,17 @@ from __future__ import annotations
 
 import dataclasses
 import typing
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 
-from slipcycle.errors import InputError
+from slipcycle.errors import InputError, ModelError
 from slipcycle.io import Case, CaseError, RunOutputs, Section
-from slipcycle.io.case import read_steady_tol
+from slipcycle.io.case import case_error_of, read_steady_tol
 from slipcycle.io.loads import step_tolerance
 from slipcycle.joints.lap_joint_protocol import (
+    PROTOCOL_NAME,
     STANDARD_PROTOCOLS,
     JointContact,
     Protocol,
@@ -52,7 +54,7 @@ from slipcycle.joints.lap_joint_protocol import (
 from slipcycle.joints.lap_joint_result import LapJointResult
 from slipcycle.joints.lap_joint_showcase import WindowOptions, lap_joint_showcase
 from slipcycle.joints.lap_joint_study import StudySettings, lap_joint_study
-from slipcycle.loading.protocol import read_step
+from slipcycle.loading.protocol import MAX_FORCE, read_step
 
 __all__ = ["LapJointCase", "read_lap_joint_case", "joint_contact", "solve_model",
            "solve_case", "run_case", "FIELD_FORMATS"]
@@ -101,7 +103,7 @@ class LapJointCase:
             raise InputError("fields", f"unknown field format {bad[0]!r} (known: "
                              f"{', '.join(FIELD_FORMATS)})")
         for p in self.protocols:
-            p.check(self.joint.bolt_count)
+            p.check(self.joint.bolt_count, self.settings.preload)
 
 
 def _lap_joint():
@@ -127,6 +129,7 @@ def _field_reader(sec: Section, f: dataclasses.Field):
     if not sec.has(name):
         if default is _REQUIRED:
             raise sec.error(name, "required key is missing")
+        sec.accept([name])      # a known key, offered for a typo of it
         return default
     kind = _kind(f, default)
     if kind is bool:
@@ -191,13 +194,17 @@ def _read_steps(ps: Section, names: list) -> dict:
     return out
 
 
-def _read_protocols(ps: Section, joint) -> tuple:
+def _read_protocols(ps: Section, joint, preload: float) -> tuple:
     bolt_count = joint.bolt_count
     names_raw = ps.raw("names", list(STANDARD_PROTOCOLS))
     if (not isinstance(names_raw, list) or not names_raw
             or not all(isinstance(n, str) and n for n in names_raw)):
         raise ps.error("names", f"must be a non-empty list of protocol names, got "
                                 f"{names_raw!r}")
+    bad = [n for n in names_raw if not PROTOCOL_NAME.fullmatch(n)]
+    if bad:
+        raise ps.error("names", "a protocol name is letters, digits and _ . + - (starting "
+                                f"with a letter or digit; it names files), got {bad[0]!r}")
     if len(set(names_raw)) != len(names_raw):
         raise ps.error("names", f"protocol names must be distinct, got {names_raw}")
     orders = ps.raw("orders", None)
@@ -223,13 +230,15 @@ def _read_protocols(ps: Section, joint) -> tuple:
             protocols.append(Protocol(name, _order(ps, "orders", raw, bolt_count)))
     for p in protocols:
         try:
-            p.check(bolt_count)
+            p.check(bolt_count, preload)
             if not joint.bolt_modulus and any(s.action == "turn" for s in p.step_list):
                 raise InputError("protocols", f"{p.name}: a turn needs elastic bolts "
                                               "(lap_joint.bolt_modulus > 0)")
         except InputError as exc:
             key = "steps" if p.name in steps else ("orders" if orders is not None
                                                   else "names")
+            if exc.key.startswith("steps.") and p.name in steps:
+                key = exc.key       # the step and its key
             raise ps.error(key, exc.problem) from None
     return tuple(protocols)
 
@@ -282,14 +291,16 @@ def read_lap_joint_case(case: Case) -> LapJointCase:
                         if k not in ("loading", "protocols", "convergence", "window",
                                      *_STUDY_KEYS)},
                        sec.prefix, sec.base_dir)
+    # the keys read beside the geometry are offered for a typo found among it
+    geometry.accept(("loading", "protocols", "convergence", "window", *_STUDY_KEYS))
     joint = _read_joint(geometry)
     geometry.finish()
     sec.accept(geometry.data)
 
-    preload = ld.float("preload", gt=0.0)
-    service = ld.float("service_amplitude", ge=0.0)
+    preload = ld.float("preload", gt=0.0, le=MAX_FORCE)
+    service = ld.float("service_amplitude", ge=0.0, le=MAX_FORCE)
     ld.finish()
-    protocols = _read_protocols(ps, joint)
+    protocols = _read_protocols(ps, joint, preload)
     ps.finish()
     coarsening = cv.array("coarsening", [2.0], shape=(None,), gt=1.0)
     if len(set(coarsening.tolist())) != coarsening.size:
@@ -396,7 +407,18 @@ def solve_case(case: Case, *, progress=None, workers: int | None = None
                ) -> LapJointResult:
     """Validate a ``lap_joint`` case completely, then solve it (``workers`` as
     :func:`solve_model`)."""
-    return solve_model(read_lap_joint_case(case), progress=progress, workers=workers)
+    lc = read_lap_joint_case(case)
+    with case_keys():
+        return solve_model(lc, progress=progress, workers=workers)
+
+
+@contextmanager
+def case_keys():
+    """A model error of the reduced joint (f ≥ f_crit) under its ``[lap_joint]`` keys."""
+    try:
+        yield
+    except ModelError as exc:
+        raise case_error_of(exc, {k: f"lap_joint.{k}" for k in _STUDY_KEYS}) from None
 
 
 def run_case(case: Case) -> RunOutputs:

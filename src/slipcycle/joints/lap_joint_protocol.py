@@ -57,6 +57,7 @@ Mech. 2, 45–55 (the assembly decides the steady state of a coupled system).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -69,11 +70,14 @@ from slipcycle.errors import InputError
 from slipcycle.io.matrices import ReducedStiffness
 from slipcycle.loading import HarmonicLoad
 from slipcycle.loading.nodal import force_scale
-from slipcycle.loading.protocol import STEP_ACTIONS, Step
+from slipcycle.loading.protocol import MAX_FORCE, STEP_ACTIONS, Step
 
 __all__ = ["JointContact", "Step", "Protocol", "StudySettings", "STANDARD_PROTOCOLS",
            "STEP_ACTIONS",
            "standard_protocol", "protocol_states", "Assembly", "assemble", "locked_system"]
+
+#: a protocol's name (a file name of its field output)
+PROTOCOL_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]*")
 
 #: the standard tightening patterns of a row of K bolts (:func:`standard_protocol`)
 STANDARD_PROTOCOLS = ("sequential", "star", "reversed", "simultaneous")
@@ -211,8 +215,11 @@ class Protocol:
     steps: tuple
 
     def __post_init__(self):
-        if not isinstance(self.name, str) or not self.name:
-            raise InputError("protocols", "a protocol needs a non-empty name")
+        if not isinstance(self.name, str) or not PROTOCOL_NAME.fullmatch(self.name):
+            # the name becomes a file name of the field output: no separators, no "..",
+            # nothing a shell or a file system reads specially
+            raise InputError("protocols", "a protocol name is letters, digits and _ . + - "
+                             f"(starting with a letter or digit), got {self.name!r}")
         try:
             steps = tuple(_as_step(s) for s in self.steps)
         except InputError as exc:
@@ -237,11 +244,18 @@ class Protocol:
         """The steps as :class:`Step` objects."""
         return tuple(_as_step(s) for s in self.steps)
 
-    def check(self, bolt_count: int) -> None:
-        """Raise InputError unless the steps fit K bolts: an order tightens every bolt
-        0 … K−1 exactly once; a general protocol names bolts 0 … K−1 only and
-        tightens every bolt at least once."""
+    def check(self, bolt_count: int, preload: float | None = None) -> None:
+        """Raise InputError unless the steps fit K bolts: every step names bolts
+        0 … K−1 only; an order tightens every bolt exactly once; a general protocol
+        tightens every bolt at least once, loosens only bolts tightened before it, and,
+        given the ``preload`` [N] (the default target), never loosens a bolt to more
+        than its force. The key of a step's error is ``steps.<name>[j].<action>``."""
         steps = self.step_list
+        for j, s in enumerate(steps):
+            bad = [b for b in s.bolts if not 0 <= b < bolt_count]
+            if bad:
+                raise InputError(f"steps.{self.name}[{j}].{s.action}", f"{self.name}: no "
+                                 f"bolt {bad[0]} (bolts 0 … {bolt_count - 1})")
         if self.plain(steps):
             flat = [b for s in steps for b in s.bolts]
             if sorted(flat) != list(range(bolt_count)):
@@ -249,16 +263,29 @@ class Protocol:
                                  f"{bolt_count} bolts 0 … {bolt_count - 1} exactly once, "
                                  f"got {[list(s.bolts) for s in steps]}")
             return
-        for j, s in enumerate(steps):
-            bad = [b for b in s.bolts if not 0 <= b < bolt_count]
-            if bad:
-                raise InputError("protocols", f"{self.name}: step {j} ({s.action}): no "
-                                 f"bolt {bad[0]} (bolts 0 … {bolt_count - 1})")
+        self._check_loosening(steps, preload)
         tightened = {b for s in steps if s.action == "tighten" for b in s.bolts}
         missing = sorted(set(range(bolt_count)) - tightened)
         if missing:
             raise InputError("protocols", f"{self.name}: bolt {missing[0]} is never "
                              "tightened")
+
+    def _check_loosening(self, steps, preload: float | None) -> None:
+        """A loosen step acts on bolts tightened before it and lowers their force."""
+        force: dict[int, float | None] = {}
+        for j, s in enumerate(steps):
+            if s.action not in ("tighten", "loosen"):
+                continue
+            targets = s.targets(np.nan if preload is None else preload)
+            for b, t in zip(s.bolts, targets, strict=True):
+                if s.action == "loosen" and b not in force:
+                    raise InputError(f"steps.{self.name}[{j}].loosen", f"{self.name}: "
+                                     f"bolt {b} is loosened before it is tightened")
+                if s.action == "loosen" and t > force[b]:
+                    raise InputError(f"steps.{self.name}[{j}].force", f"{self.name}: "
+                                     f"loosening bolt {b} to {t:g} N would raise its force "
+                                     f"({force[b]:g} N): tighten it instead")
+                force[b] = t
 
     @property
     def label(self) -> str:
@@ -333,6 +360,10 @@ class StudySettings:
         F = self.service_amplitude
         if not (isinstance(F, int | float) and np.isfinite(F) and F >= 0):
             raise InputError("service_amplitude", f"must be ≥ 0 N, got {F!r}")
+        for name in ("preload", "service_amplitude"):
+            if getattr(self, name) > MAX_FORCE:
+                raise InputError(name, f"must be at most {MAX_FORCE:g} N (beyond any "
+                                 f"joint), got {getattr(self, name)!r}")
         known = [*RUN_DEFAULTS, "accelerate"]
         unknown = set(self.run) - set(known)
         if unknown:
@@ -470,6 +501,10 @@ def _plan(contact: JointContact, protocol: Protocol, preload: float) -> list[tup
                     raise InputError("protocols", f"{where}: a grip offset needs the grip "
                                      "stiffness of the joint (its description)")
                 level = step.offset * grip
+                if abs(level) > MAX_FORCE:
+                    raise InputError("protocols", f"{where}: the offset {step.offset:g} m "
+                                     f"is a grip force of {level:g} N, beyond "
+                                     f"{MAX_FORCE:g} N")
             else:
                 level = 0.0 if step.action == "release" else float(step.force)
             ops.append(("set", [k], [level]))
@@ -503,7 +538,7 @@ def protocol_states(contact: JointContact, protocol: Protocol, preload: float
     :class:`~slipcycle.fe.lap_joint.LapJoint`) first opens it: the gap's reactions are the
     first state, and every later state includes them.
     """
-    protocol.check(contact.bolt_count)
+    protocol.check(contact.bolt_count, preload)
     rigid = replace(contact, bolt_stiffness=0.0)
     alg = _Algebra.of(rigid)
     k, m = contact.bolt_count, len(contact.case_names)
@@ -631,7 +666,7 @@ def assemble(contact: JointContact, protocol: Protocol, preload: float, friction
     -------
     Assembly
     """
-    protocol.check(contact.bolt_count)
+    protocol.check(contact.bolt_count, preload)
     alg = _Algebra.of(contact)
     k, m = contact.bolt_count, len(contact.case_names)
     ops = _plan(contact, protocol, preload)

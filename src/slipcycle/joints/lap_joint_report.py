@@ -177,8 +177,8 @@ def _bolt_table(result) -> list[str]:
         return []
     lo, hi = result.bolt_force_range
     kb = result.contact.bolt_stiffness
-    kind = (f"elastic bolts, k_b = {kb:.4g} N/m" if kb > 0 else "constant-force bolts")
-    lines = ["## Bolt forces", "", f"{kind.capitalize()}; per bolt after the assembly, and "
+    kind = (f"Elastic bolts, k_b = {kb:.4g} N/m" if kb > 0 else "Constant-force bolts")
+    lines = ["## Bolt forces", "", f"{kind}; per bolt after the assembly, and "
              "its range over the steady cycle [N].", "",
              "| protocol | after assembly | least in the cycle | largest in the cycle |",
              "|---|---|---|---|"]

@@ -22,7 +22,7 @@ from slipcycle.discrete3d.shakedown_window import (
     shakedown_window,
 )
 from slipcycle.io import Case
-from slipcycle.joints.lap_joint_case import joint_contact, read_lap_joint_case
+from slipcycle.joints.lap_joint_case import case_keys, joint_contact, read_lap_joint_case
 from slipcycle.joints.lap_joint_showcase import protocol_subjects
 from slipcycle.sweep.dataset import StudyStatus
 
@@ -35,13 +35,15 @@ class LapJointShakedown(ShakedownWindow3D):
     one subject per assembly protocol, λ the service amplitude [N]."""
 
     model: ClassVar[str] = "lap_joint"
+    lam_unit: ClassVar[str] = "N"
 
 
 def lap_joint_subjects(case: Case) -> tuple[list[Subject], dict]:
     """One :class:`Subject` per protocol of a ``lap_joint`` case (its finest mesh), and
     the engine settings of the case's ``[run]``."""
     lc = read_lap_joint_case(case)
-    subjects = protocol_subjects(joint_contact(lc.joint), lc.protocols, lc.settings)
+    with case_keys():
+        subjects = protocol_subjects(joint_contact(lc.joint), lc.protocols, lc.settings)
     run = dict(lc.settings.run)
     return subjects, run
 

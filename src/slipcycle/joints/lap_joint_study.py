@@ -204,7 +204,7 @@ def lap_joint_study(contacts: JointContact | Sequence[JointContact],
                          f"{spacing}")
     for c in contacts:
         for p in protocols:
-            p.check(c.bolt_count)
+            p.check(c.bolt_count, settings.preload)
     # the systems are checked well posed once per mesh, before any run starts
     systems = [locked_system(c, settings.friction, settings.accept_ill_posed)
                if c.elastic else joint_system(c, settings) for c in contacts]

@@ -40,6 +40,10 @@ from slipcycle.errors import CaseError, InputError
 
 __all__ = ["STEP_ACTIONS", "Step", "read_step", "step_states"]
 
+#: the largest force (or service level) a step may set [N]: 1e12 N is beyond any joint
+#: (an M100 bolt carries about 4e6 N)
+MAX_FORCE = 1e12
+
 #: the step actions (module docstring)
 STEP_ACTIONS = ("tighten", "loosen", "turn", "service", "overload", "release")
 
@@ -99,7 +103,14 @@ class Step:
                                  f"({len(bolts)}), got {f.size}")
             if not np.all(np.isfinite(f)) or (self.action != "service" and np.any(f < 0)):
                 sign = "" if self.action == "service" else " and ≥ 0"
-                raise InputError("force", f"must be finite{sign} N, got {f.tolist()}")
+                raise InputError("force", f"must be finite{sign}, got {f.tolist()}")
+            if self.action == "tighten" and np.any(f == 0):
+                raise InputError("force", "a tighten step needs targets > 0 N (a loosen "
+                                 f"step takes a bolt to 0), got {f.tolist()}")
+            if np.any(np.abs(f) > MAX_FORCE):
+                raise InputError("force", f"must be at most {MAX_FORCE:g} in size (beyond "
+                                 "any joint, and the round-off of such a load would exceed "
+                                 f"the preload), got {f.tolist()}")
             if self.action == "overload" and f[0] == 0:
                 raise InputError("force", "an overload needs a nonzero service load")
             object.__setattr__(self, "force", float(f[0]) if f.size == 1 else tuple(f.tolist()))
@@ -188,8 +199,11 @@ def read_step(key: str, raw, what: str = "bolt") -> Step:
         if k not in allowed:
             raise CaseError(f"{key}.{k}", f"a {action} step takes no {k}")
     for k, v in kw.items():
-        if isinstance(v, bool) or not isinstance(v, int | float | list):
-            raise CaseError(f"{key}.{k}", f"must be a number (or a list), got {v!r}")
+        items = v if isinstance(v, list) else [v]
+        if not items or any(isinstance(x, bool) or not isinstance(x, int | float)
+                            for x in items):
+            raise CaseError(f"{key}.{k}", f"must be a number (or a list of numbers), got "
+                                          f"{v!r}")
     if action in ("tighten", "loosen", "turn"):
         bolts = value if isinstance(value, list) else [value]
         if not bolts or any(isinstance(b, bool) or not isinstance(b, int) for b in bolts):

@@ -123,7 +123,8 @@ def summary_numbers(summary: dict, flags: Mapping[str, tuple] | None = None
     Returns
     -------
     CellOutputs
-        Scalars and fixed-length numeric lists as numbers; a categorical entry listed in
+        Scalars and fixed-size numeric lists (nested: tables such as protocol × bolt) as
+        numbers; a categorical entry listed in
         ``flags`` as the position of its word (attributes ``flag_values``,
         ``flag_meanings``); any other text entry as text; lists of node indices as their
         count ``n_<key>``. ``attrs[name]["units"]`` is the summary's unit of the entry,
@@ -169,7 +170,7 @@ def summary_numbers(summary: dict, flags: Mapping[str, tuple] | None = None
                 arr = np.asarray(v, dtype=float)
             except (TypeError, ValueError):
                 continue
-            if arr.ndim != 1 or not arr.size:
+            if not arr.size:
                 continue
             out[k] = arr
         else:
