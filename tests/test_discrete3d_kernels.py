@@ -89,13 +89,19 @@ def test_step_bookkeeping_is_the_trapezoidal_rule_of_its_definition(n, seed):
     rng = np.random.default_rng(seed)
     x0, r0, x1, r1, drw = (rng.normal(size=3 * n) for _ in range(5))
     modes = rng.integers(0, 3, n).astype(np.int8)
+    f = np.full(n, 0.5)
     diss, slip_len = np.zeros(n), np.zeros(n)
     sep, slipped = np.zeros(n, bool), np.zeros(n, bool)
-    work, normal_work, none_stuck = book_step(x0, r0, x1, r1, drw, modes, diss, slip_len,
+    work, normal_work, none_stuck = book_step(x0, r0, x1, r1, drw, modes, f, diss, slip_len,
                                               sep, slipped)
     dv = (x1[:2 * n] - x0[:2 * n]).reshape(n, 2)
     qm = 0.5 * (r0[:2 * n] + r1[:2 * n]).reshape(n, 2)
     np.testing.assert_allclose(diss, -np.sum(qm * dv, axis=1), rtol=1e-12, atol=1e-14)
+    # a frictionless node's q is round-off: it books nothing
+    free = np.zeros(n)
+    book_step(x0, r0, x1, r1, drw, modes, np.zeros(n), free, np.zeros(n), np.zeros(n, bool),
+              np.zeros(n, bool))
+    assert np.all(free == 0.0)
     assert abs(work - 0.5 * (x0 + x1) @ drw) <= 1e-12 * np.sum(np.abs(0.5 * (x0 + x1) * drw))
     nw = 0.5 * (r0[2 * n:] + r1[2 * n:]) @ (x1[2 * n:] - x0[2 * n:])
     assert abs(normal_work - nw) <= 1e-12 * (1.0 + abs(nw)) * n

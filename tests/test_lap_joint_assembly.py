@@ -255,7 +255,7 @@ STEP_ERRORS = {
     "{turn = [0], by = 0.0}": "steps.fit_up[0].by",
     "{tighten = [0], forse = 1}": "steps.fit_up[0].forse",
     "{tighten = [0, 0]}": "steps.fit_up[0].tighten",
-    "{tighten = [0, 5]}": "steps: fit_up: step 0 (tighten): no bolt 5",
+    "{tighten = [0, 5]}": "steps.fit_up[0].tighten: fit_up: step 0 (tighten): no bolt 5",
     "{overload = 0.0}": "steps.fit_up[0].overload",
     "3": "steps.fit_up[0]",
     '{tighten = ["a"]}': "steps.fit_up[0].tighten",

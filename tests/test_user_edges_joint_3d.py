@@ -184,8 +184,9 @@ def test_python_entry_points_refuse_void_inputs_with_the_key():
         discrete3d_case(dc.system, dc.load, protocol=[])
     with pytest.raises(InputError, match="initial_slip"):
         discrete3d_case(dc.system, dc.load, initial_slip=np.full((3, 2), np.nan))
-    with pytest.raises(InputError, match="force"):
-        Step("tighten", (0,), force=0.0)
+    with pytest.raises(InputError, match="more than 0 N") as err:
+        Protocol("a", (Step("tighten", (0,), force=0.0), Step("tighten", (1,)))).check(2)
+    assert err.value.step == (0, "force")
     with pytest.raises(TypeError, match="mapping"):
         slipcycle.run(example_path("discrete3d_three_node.toml"), "discrete3d.friction=0.2")
 

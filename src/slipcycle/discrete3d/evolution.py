@@ -1233,8 +1233,7 @@ class Evolution3D:
                 raise IncrementalSolverError(
                     "the incremental problem of a load step has no solution the Newton "
                     "method can find, even on a step 2^-" f"{self.max_depth} of a load "
-                    "interval; the friction coefficient is probably above the critical "
-                    "value for the current set of slipping and separated nodes")
+                    f"interval; {self._likely_cause()}")
             if self._totals is not None:
                 self._totals.unresolved += 1
             self._leaves.append((fa, fb, depth, "U", (h1.modes, h2.modes)))
@@ -1252,6 +1251,16 @@ class Evolution3D:
         else:
             self._interval(mid, rwb, None, depth + 1, None if h2 is None else (h2.x, h2.r),
                            fa=fm, fb=fb, at_event=at_event)
+
+    def _likely_cause(self) -> str:
+        """Why a step may have no solution: f above its critical value, or (f checked
+        below it) loads too far apart in size for double precision."""
+        if getattr(self.sys, "accept_ill_posed", True):
+            return ("the friction coefficient is probably above the critical value for the "
+                    "current set of slipping and separated nodes")
+        return ("f is below the sampled critical value, so the likely cause is loads of "
+                "sizes too far apart for double precision (the round-off of the largest "
+                "above the smallest), or a critical value the sampling missed")
 
     def _condense_interval(self, rwa: np.ndarray, rwb: np.ndarray) -> Step | None:
         """Where no condensation is active (the first path, or one that fell back),

@@ -194,9 +194,12 @@ class Section:
         """Convert an already-read value to a checked float array (see :meth:`array`)."""
         if raw is None:
             return None  # type: ignore[return-value]
-        if _holds_bool(raw):
+        if _holds(raw, bool | np.bool_):
             # NumPy reads true as 1.0: a switch where a number goes is a mistake, not a 1
             raise self.error(key, f"must contain numbers, not true or false, got {raw!r}")
+        if _holds(raw, str | bytes):
+            # NumPy reads "30" as 30.0: a quoted number is text, as it is for one number
+            raise self.error(key, f"must contain numbers, not text, got {raw!r}")
         try:
             arr = np.asarray(raw, dtype=float)
         except (TypeError, ValueError):
@@ -259,12 +262,12 @@ class Section:
         return [Section(t, f"{self.key(key)}[{i}]", self.base_dir) for i, t in enumerate(raw)]
 
 
-def _holds_bool(raw: Any) -> bool:
-    """Whether ``raw`` is a bool or a (nested) list or tuple holding one."""
-    if isinstance(raw, bool | np.bool_):
+def _holds(raw: Any, kind) -> bool:
+    """Whether ``raw`` is of ``kind`` or a (nested) list or tuple holding one."""
+    if isinstance(raw, kind):
         return True
     if isinstance(raw, list | tuple):
-        return any(_holds_bool(item) for item in raw)
+        return any(_holds(item, kind) for item in raw)
     return False
 
 

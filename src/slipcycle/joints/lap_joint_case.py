@@ -237,8 +237,9 @@ def _read_protocols(ps: Section, joint, preload: float) -> tuple:
         except InputError as exc:
             key = "steps" if p.name in steps else ("orders" if orders is not None
                                                   else "names")
-            if exc.key.startswith("steps.") and p.name in steps:
-                key = exc.key       # the step and its key
+            if getattr(exc, "step", None) and p.name in steps:
+                j, field = exc.step          # the step and its key
+                key = f"steps.{p.name}[{j}].{field}"
             raise ps.error(key, exc.problem) from None
     return tuple(protocols)
 

@@ -249,13 +249,18 @@ class Protocol:
         0 … K−1 only; an order tightens every bolt exactly once; a general protocol
         tightens every bolt at least once, loosens only bolts tightened before it, and,
         given the ``preload`` [N] (the default target), never loosens a bolt to more
-        than its force. The key of a step's error is ``steps.<name>[j].<action>``."""
+        than its force; a tighten targets more than 0 N. A step's error has key
+        ``protocols`` and its ``step`` = (j, field)."""
         steps = self.step_list
         for j, s in enumerate(steps):
             bad = [b for b in s.bolts if not 0 <= b < bolt_count]
             if bad:
-                raise InputError(f"steps.{self.name}[{j}].{s.action}", f"{self.name}: no "
-                                 f"bolt {bad[0]} (bolts 0 … {bolt_count - 1})")
+                raise _step_error(self.name, j, s.action, f"no bolt {bad[0]} (bolts 0 … "
+                                  f"{bolt_count - 1})")
+            if s.action == "tighten" and s.force is not None and \
+                    np.any(np.asarray(s.force) == 0):
+                raise _step_error(self.name, j, "force", "a tighten targets more than 0 N (a "
+                                  "loosen step takes a bolt to 0)")
         if self.plain(steps):
             flat = [b for s in steps for b in s.bolts]
             if sorted(flat) != list(range(bolt_count)):
@@ -279,18 +284,26 @@ class Protocol:
             targets = s.targets(np.nan if preload is None else preload)
             for b, t in zip(s.bolts, targets, strict=True):
                 if s.action == "loosen" and b not in force:
-                    raise InputError(f"steps.{self.name}[{j}].loosen", f"{self.name}: "
-                                     f"bolt {b} is loosened before it is tightened")
+                    raise _step_error(self.name, j, "loosen", f"bolt {b} is loosened before "
+                                      "it is tightened")
                 if s.action == "loosen" and t > force[b]:
-                    raise InputError(f"steps.{self.name}[{j}].force", f"{self.name}: "
-                                     f"loosening bolt {b} to {t:g} N would raise its force "
-                                     f"({force[b]:g} N): tighten it instead")
+                    raise _step_error(self.name, j, "force", f"loosening bolt {b} to {t:g} N "
+                                      f"would raise its force ({force[b]:g} N): tighten it "
+                                      "instead")
                 force[b] = t
 
     @property
     def label(self) -> str:
         """The steps as text: ``0 → 2 → 1`` (``0+1`` for bolts tightened together)."""
         return " → ".join(s.label for s in self.step_list)
+
+
+def _step_error(name: str, j: int, field: str, problem: str) -> InputError:
+    """The error of step ``j`` of protocol ``name`` (key ``protocols``), carrying
+    ``step`` = (j, field) so that a case reader can name the step's key."""
+    err = InputError("protocols", f"{name}: step {j} ({field}): {problem}")
+    err.step = (j, field)
+    return err
 
 
 def standard_protocol(name: str, bolt_count: int) -> Protocol:

@@ -104,9 +104,6 @@ class Step:
             if not np.all(np.isfinite(f)) or (self.action != "service" and np.any(f < 0)):
                 sign = "" if self.action == "service" else " and ≥ 0"
                 raise InputError("force", f"must be finite{sign}, got {f.tolist()}")
-            if self.action == "tighten" and np.any(f == 0):
-                raise InputError("force", "a tighten step needs targets > 0 N (a loosen "
-                                 f"step takes a bolt to 0), got {f.tolist()}")
             if np.any(np.abs(f) > MAX_FORCE):
                 raise InputError("force", f"must be at most {MAX_FORCE:g} in size (beyond "
                                  "any joint, and the round-off of such a load would exceed "
