@@ -87,3 +87,27 @@ def test_demo_report_folder_has_the_users_umask(run_cli, tmp_path, monkeypatch):
         os.umask(old)
     assert code == 0, err
     assert stat.S_IMODE((tmp_path / "report").stat().st_mode) == 0o755
+
+
+def test_demo_replaces_its_own_report_and_refuses_a_folder_of_other_files(run_cli, tmp_path,
+                                                                          monkeypatch):
+    """The demo replaces --out whole: a user's files there were deleted. A folder of other
+    files is refused in one line (kept as it was); an earlier report is replaced."""
+    import slipcycle.cli.cmd_demo as demo
+    from slipcycle.demo import DEMO_CASES
+
+    monkeypatch.setattr(demo, "DEMO_CASES", {"rough_contact": DEMO_CASES["rough_contact"]},
+                        raising=False)
+    user = tmp_path / "thesis"
+    (user / "sub").mkdir(parents=True)
+    (user / "thesis.tex").write_text("precious")
+    (user / "sub" / "data.csv").write_text("x")
+    code, _, err = run_cli("demo", "--out", user, "-q")
+    assert code == 2 and "--out" in err and len(err.strip().splitlines()) == 1, err
+    assert (user / "thesis.tex").read_text() == "precious"
+    assert (user / "sub" / "data.csv").read_text() == "x"
+    report = tmp_path / "report"
+    assert run_cli("demo", "--out", report, "-q")[0] == 0
+    (report / "stale.txt").write_text("left by an older report")
+    assert run_cli("demo", "--out", report, "-q")[0] == 0
+    assert not (report / "stale.txt").exists() and (report / "report.md").is_file()

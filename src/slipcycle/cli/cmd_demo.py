@@ -3,7 +3,8 @@
 The report (``DIR/report.md``) lists each case, its key numbers and its figures; every
 case's own results (summary.json, result.nc, figures/) sit in ``DIR/<case>/``. The whole
 report is written in a staging folder beside ``DIR`` and moved into place at the end, so an
-interrupted demo leaves no partial report.
+interrupted demo leaves no partial report. An existing ``DIR`` is replaced only when it is
+empty or an earlier demo report; one holding other files is refused (they would be lost).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ def execute(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     check_output_dir(out)
+    _check_replaceable(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_partials(out)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-{os.getpid()}-",
@@ -59,6 +61,28 @@ def execute(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(f"report written to {out / report.name}")
     return 0
+
+
+#: the first line of a demo report (``slipcycle.demo.write_report``)
+_REPORT_HEAD = "# slipcycle demo report"
+
+
+def _check_replaceable(out: Path) -> None:
+    """The demo replaces ``out`` whole: refuse a directory that holds anything but an
+    earlier demo report (a user's files there would be deleted)."""
+    from slipcycle.io import CaseError
+
+    if not out.is_dir() or not any(out.iterdir()):
+        return
+    report = out / "report.md"
+    try:
+        head = report.read_text(encoding="utf-8").split("\n", 1)[0]
+    except (OSError, UnicodeDecodeError):
+        head = ""
+    if not head.startswith(_REPORT_HEAD):
+        raise CaseError("--out", f"{out} holds files that are no demo report (the demo "
+                        "replaces its --out directory whole); choose a new or empty "
+                        "directory")
 
 
 def __getattr__(name: str) -> Any:
