@@ -77,6 +77,26 @@ def _elasticity(sec: Section, plane: bool) -> ContactElasticity:
                                             compliance_ratio=ratio)
 
 
+def _rough_compliance_ratio(sec: Section) -> float:
+    """λ_c of a ``rough_exponential`` profile from E and ν (3-D).
+
+    The same combination as every other profile (:meth:`ContactElasticity.from_materials`:
+    E*/(4G*), Mindlin 1949). Without E it is (2 − ν)/(2(1 − ν)), which does not depend on
+    the moduli when both ν are equal; dissimilar ν need E.
+    """
+    nu = sec.array("nu", None, shape=(2,), gt=-1.0, le=0.5)
+    if nu is None:
+        raise sec.error("compliance_ratio", "required for rough_exponential unless nu "
+                        "(and E for dissimilar materials) is given")
+    E = sec.array("E", None, shape=(2,), gt=0.0)
+    if E is None:
+        if nu[0] != nu[1]:
+            raise sec.error("E", "required with dissimilar nu: λ_c = E*/(4G*) of two "
+                            "materials depends on their moduli")
+        E = np.ones(2)   # equal ν: E*/(4G*) = (2 − ν)/(2(1 − ν)) whatever the moduli
+    return ContactElasticity.from_materials(tuple(E), tuple(nu), plane=False).compliance_ratio
+
+
 def _profile(sec: Section):
     name = sec.string("profile", choices=PROFILES)
     if name in ("rough_exponential", "tabulated"):
@@ -88,13 +108,7 @@ def _profile(sec: Section):
                     raise sec.error(key, "not used by a rough_exponential profile when "
                                     "compliance_ratio is given (E and nu only set λ_c)")
             if ratio is None:
-                # λ_c from ν when given (3-D, Barber 2012, eq. 9), else required
-                nu = sec.array("nu", None, shape=(2,), gt=-1.0, le=0.5)
-                if nu is None:
-                    raise sec.error("compliance_ratio", "required for rough_exponential "
-                                    "unless nu is given")
-                sec.array("E", None, shape=(2,), gt=0.0)
-                ratio = float(np.mean((2 - nu) / (2 * (1 - nu))))
+                ratio = _rough_compliance_ratio(sec)
         else:
             if sec.has("table_file"):   # columns U [m], P [N] (CSV or netCDF)
                 if sec.has("table_U") or sec.has("table_P"):
@@ -206,7 +220,8 @@ PROFILE_KEYS = {
     "rough_exponential": {"gamma_sigma", "compliance_ratio", "nu", "E"},
     "tabulated": {"table_U", "table_P", "table_file", "compliance_ratio"},
     "topography": {"topography_file", "nominal_area", "fit", "bem_grid", "bem_loads",
-                   "fit_tolerance", "short_cutoff", "long_cutoff", "E", "nu",
+                   "fit_tolerance", "short_cutoff", "long_cutoff", "fill_undefined",
+                   "topography_size", "E", "nu",
                    "contact_modulus", "compliance_ratio"},
 }
 

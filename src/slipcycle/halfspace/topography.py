@@ -50,6 +50,9 @@ __all__ = ["TOPO_INSTALL", "BEMLaw", "ExponentialFit", "SurfaceMap", "Topography
 TOPO_INSTALL = "pip install 'slipcycle[topo]'"
 #: bump when the BEM recipe changes, so old cache files are not reused
 _CACHE_VERSION = 1
+#: a map whose rms height is below this fraction of its heights' magnitude and of its size
+#: is flat: round-off of removing the mean, not roughness
+_FLAT = 1e-12
 
 
 def require_topo(key: str = "topography"):
@@ -100,6 +103,9 @@ class SurfaceMap:
             raise InputError("topography", "height map has undefined (nan) points")
         if not all(np.isfinite(s) and s > 0 for s in self.size):
             raise InputError("topography", f"physical size must be > 0, got {self.size}")
+        # the magnitude of the heights before the mean is removed: a constant map leaves
+        # round-off of that magnitude, which the flatness test must not take for roughness
+        object.__setattr__(self, "_magnitude", float(np.max(np.abs(h))))
         object.__setattr__(self, "heights", h - h.mean())
         object.__setattr__(self, "size", (float(self.size[0]), float(self.size[1])))
 
@@ -107,6 +113,33 @@ class SurfaceMap:
     def rms_height(self) -> float:
         """σ, the rms height (m)."""
         return float(np.sqrt(np.mean(self.heights**2)))
+
+    @property
+    def flat(self) -> bool:
+        """Whether the map is flat to round-off: σ ≤ 1e-12 of the larger of the heights'
+        magnitude (before the mean was removed) and the map size."""
+        return not self.rms_height > _FLAT * max(self._magnitude, *self.size)
+
+    def complete_contact_pressure(self, contact_modulus: float) -> float:
+        """Nominal pressure (Pa) above which the map is in complete contact.
+
+        In complete contact the pressure is p̄ − (E*/2) F⁻¹[|q| ĥ(q)] (linear elasticity of
+        the periodic half-space; for h cos(2πx/λ) this is Johnson's p* = πE*h/λ), so
+        contact is complete once p̄ reaches the largest value of (E*/2) F⁻¹[|q| ĥ]. Beyond
+        it the approach no longer changes and the normal law ends.
+
+        Parameters
+        ----------
+        contact_modulus : float
+            E* in Pa.
+        """
+        h = self.heights
+        (nx, ny), (Lx, Ly) = h.shape, self.size
+        qx = 2 * np.pi * np.fft.fftfreq(nx, Lx / nx)
+        qy = 2 * np.pi * np.fft.rfftfreq(ny, Ly / ny)
+        q = np.hypot(qx[:, None], qy[None, :])
+        return float(0.5 * contact_modulus * np.max(np.fft.irfft2(q * np.fft.rfft2(h),
+                                                                  s=h.shape)))
 
     @property
     def grid(self) -> tuple[int, int]:
@@ -124,7 +157,8 @@ class SurfaceMap:
         return h.hexdigest()
 
 
-def _to_map(topo, periodic: bool | None = None, fill_undefined: bool = False) -> SurfaceMap:
+def _to_map(topo, periodic: bool | None = None, fill_undefined: bool = False,
+            label: str = "topography") -> SurfaceMap:
     """A SurfaceTopography object as a :class:`SurfaceMap` in metres.
 
     Undefined points (masked, NaN or ±inf heights) are refused unless ``fill_undefined``,
@@ -143,6 +177,9 @@ def _to_map(topo, periodic: bool | None = None, fill_undefined: bool = False) ->
                          "SurfaceTopography converts (m, mm, µm, nm, ...): "
                          f"{' '.join(str(exc).split())}") from None
     undefined = int(np.ma.count_masked(h))
+    if undefined == h.size:   # nothing to interpolate from, with or without fill_undefined
+        raise InputError("topography", f"all {h.size} height points are undefined (NaN, "
+                         "±inf or masked): the file holds no heights")
     if undefined:
         if not fill_undefined:
             raise InputError("topography", f"{undefined} of {h.size} height points are "
@@ -153,8 +190,8 @@ def _to_map(topo, periodic: bool | None = None, fill_undefined: bool = False) ->
         from SurfaceTopography import Topography
 
         logging.getLogger("slipcycle").warning(
-            "topography: %d of %d undefined height points filled by interpolation",
-            undefined, h.size)
+            "%s: %d of %d undefined height points filled by interpolation (fill_undefined)",
+            label, undefined, h.size)
         topo = Topography(h, topo.physical_sizes, periodic=topo.is_periodic,
                           unit="m").interpolate_undefined_data()
     is_periodic = bool(topo.is_periodic if periodic is None else periodic)
@@ -187,8 +224,80 @@ def _unreadable(path: str | Path, exc: Exception) -> str:
             "files, plain-text columns); give the height map in one of them")
 
 
+def _open(st, path: str | Path, key: str, size: tuple[float, float] | None):
+    """The file's topography through SurfaceTopography, with the physical size it lacks.
+
+    NPY files and plain-text matrices hold heights only: their size comes from ``size``
+    (``topography_size``), and is refused for a file that gives its own.
+    """
+    try:
+        reader = st.open_topography(str(path))
+        channel = reader.default_channel
+    except Exception as exc:  # noqa: BLE001 - many kinds of reader error; one line
+        raise InputError(key, _unreadable(path, exc)) from None
+    own = channel.physical_sizes
+    if channel.dim != 2:
+        raise InputError(key, "needs a 2-D topography (a height map), got a line scan")
+    if own is None and size is None:
+        kind = type(reader).__name__.removesuffix("Reader")
+        raise InputError(key, f"{path} (read as {kind}) holds heights without a physical "
+                         "size, as NPY files and plain-text matrices do: give it as "
+                         "topography_size = [Lx, Ly] in m")
+    if own is not None and size is not None:
+        raise InputError("topography_size", f"{path} gives its own size "
+                         f"({' x '.join(f'{v:g}' for v in own)} {channel.unit or 'm'}); "
+                         "remove topography_size")
+    try:
+        if size is not None:
+            return reader.topography(physical_sizes=tuple(size))
+        return reader.topography()
+    except Exception as exc:  # noqa: BLE001 - many kinds of reader error; one line
+        raise InputError(key, _unreadable(path, exc)) from None
+
+
+def _check_grid(path: str | Path, key: str) -> None:
+    """Refuse height maps whose coordinates are not a uniform grid.
+
+    SurfaceTopography reads netCDF heights without their x, y coordinates and plain-text
+    x y z columns only on a grid, so a non-uniform grid would be taken as uniform (netCDF)
+    or fail with a message about formats (text).
+    """
+    try:
+        with open(path, "rb") as f:
+            head = f.read(8)
+    except OSError:
+        return                           # the reader says what is wrong
+    coords: list[np.ndarray] = []
+    if head.startswith((b"CDF", b"\x89HDF")):
+        try:
+            with xr.open_dataset(path) as ds:
+                coords = [np.asarray(ds[c].values, float) for c in ("x", "y")
+                          if c in ds.coords and ds[c].ndim == 1 and ds[c].size > 2]
+        except Exception:  # noqa: BLE001 - unreadable here: the reader's message follows
+            return
+    elif not any(b in head for b in (b"\x00",)):
+        try:
+            data = np.loadtxt(path, ndmin=2, comments="#")
+        except (ValueError, UnicodeDecodeError):
+            return
+        if data.shape[1] != 3:
+            return
+        xs, ys = np.unique(data[:, 0]), np.unique(data[:, 1])
+        if xs.size * ys.size != data.shape[0]:
+            raise InputError(key, f"{path}: its {data.shape[0]} x y z rows are not a grid "
+                             f"({xs.size} x values by {ys.size} y values); give the heights "
+                             "on a uniform grid")
+        coords = [xs, ys]
+    for c in coords:
+        step = np.diff(c)
+        if step.size and np.ptp(step) > 1e-6 * np.abs(step).max():
+            raise InputError(key, f"{path}: grid not uniform (spacing from {step.min():.3g} "
+                             f"to {step.max():.3g}); give the heights on a uniform grid")
+
+
 def read_surface(path: str | Path, *, key: str = "topography",
-                 fill_undefined: bool = False) -> SurfaceMap:
+                 fill_undefined: bool = False, label: str | None = None,
+                 size: tuple[float, float] | None = None) -> SurfaceMap:
     """Read a topography file through SurfaceTopography (any format it knows).
 
     Parameters
@@ -200,6 +309,10 @@ def read_surface(path: str | Path, *, key: str = "topography",
         Case-file key blamed for problems.
     fill_undefined : bool
         Interpolate undefined points (refused by default, with their count).
+    label : str, optional
+        Dotted case-file key named by the warning about filled points (default ``key``).
+    size : (float, float), optional
+        (Lx, Ly) in m for files that give no size (NPY, plain-text matrices).
 
     Returns
     -------
@@ -217,12 +330,10 @@ def read_surface(path: str | Path, *, key: str = "topography",
         # SciPy's netCDF reader warns when a memory-mapped file closes with arrays still
         # referring to it; the heights are copied, the warning is noise for the user
         warnings.filterwarnings("ignore", message="Cannot close a netcdf_file")
+        _check_grid(path, key)
+        topo = _open(st, path, key, size)
         try:
-            topo = st.read_topography(str(path))
-        except Exception as exc:  # noqa: BLE001 - many kinds of reader error; one line
-            raise InputError(key, _unreadable(path, exc)) from None
-        try:
-            surface = _to_map(topo, fill_undefined=fill_undefined)
+            surface = _to_map(topo, fill_undefined=fill_undefined, label=label or key)
         except InputError as exc:
             raise InputError(key, exc.problem) from None
         finally:
@@ -230,10 +341,10 @@ def read_surface(path: str | Path, *, key: str = "topography",
             import gc
 
             gc.collect()
-    if not surface.rms_height > 0:
-        raise InputError(key, f"{path} is perfectly flat (rms height 0 m): a flat surface "
-                         "has no rough-contact law; use profile = \"flat_punch\" for a "
-                         "flat contact")
+    if surface.flat:
+        raise InputError(key, f"{path} is perfectly flat (rms height {surface.rms_height:.3g}"
+                         " m, round-off): a flat surface has no rough-contact law; use "
+                         "profile = \"flat_punch\" for a flat contact")
     return surface
 
 
@@ -416,6 +527,9 @@ def bem_normal_law(surface: SurfaceMap, contact_modulus: float, pressures: np.nd
     from SurfaceTopography import Topography
 
     p = np.asarray(pressures, float)
+    if surface.flat:   # the solver would iterate to maxiter on a map of round-off
+        raise InputError("topography", f"the height map is flat (rms height "
+                         f"{surface.rms_height:.3g} m): no rough-contact law")
     h = surface.heights
     topo = Topography(h, surface.size, periodic=True)
     sub = PeriodicFFTElasticHalfSpace(h.shape, contact_modulus, surface.size)
@@ -666,6 +780,35 @@ def read_table_file(path: Path, key: str = "table_file") -> tuple[np.ndarray, np
     return U, P
 
 
+#: bytes per grid point of one BEM solve: the constrained conjugate gradients keep about 20
+#: real fields (heights, forces, gaps, residual, direction, ...) and the half-space its
+#: Fourier weights and transforms; 2.3 GB were measured on the way up at 4096²
+BEM_BYTES_PER_POINT = 256.0
+
+
+def bem_memory(n: int) -> float:
+    """Bytes (order of magnitude) of a BEM solve on an n × n grid."""
+    return BEM_BYTES_PER_POINT * float(n) ** 2
+
+
+def check_bem_memory(key: str, n: int) -> None:
+    """Refuse (InputError naming ``key``) a BEM grid of n × n points that would need more
+    memory than :func:`slipcycle.io.sizes.memory_limit`, before any work."""
+    from slipcycle.io import CaseError
+    from slipcycle.io.sizes import check_memory
+
+    try:
+        check_memory(key, bem_memory(n), f"BEM grids of {n} x {n} points",
+                     advice="reduce bem_grid (Fourier resampling keeps the wavelengths "
+                     "longer than two of its pixels)")
+    except CaseError as exc:
+        raise InputError(key, exc.problem) from None
+
+
+#: the last map read by :meth:`TopographySource.native` and the key it was read with
+_LAST_NATIVE: dict = {}
+
+
 @dataclass(frozen=True)
 class TopographySource:
     """A case's rough interface: topography file, BEM settings and the fit.
@@ -688,6 +831,12 @@ class TopographySource:
         Band on the local γσ for the exponential fit.
     short_cutoff, long_cutoff : float or None
         Wavelength filter (m) applied before the BEM.
+    fill_undefined : bool
+        Interpolate undefined height points (refused by default).
+    size : (float, float) or None
+        (Lx, Ly) in m of a file that gives no size (NPY, plain-text matrix).
+    label : str
+        Dotted case-file key of the file, for the warning about filled points.
     """
 
     path: Path
@@ -700,6 +849,8 @@ class TopographySource:
     short_cutoff: float | None = None
     long_cutoff: float | None = None
     fill_undefined: bool = False
+    size: tuple[float, float] | None = None
+    label: str = field(default="topography_file", compare=False)
 
     def __post_init__(self):
         for name in ("nominal_area", "contact_modulus"):
@@ -720,17 +871,40 @@ class TopographySource:
                              "m: the filter keeps wavelengths between the two and would keep "
                              "none")
 
-    def surface(self) -> SurfaceMap:
-        """The filtered map on the BEM grid."""
-        s = read_surface(self.path, key="topography_file",
-                         fill_undefined=self.fill_undefined)
+    def native(self) -> SurfaceMap:
+        """The file's map in m, filtered, on its own grid (read once: the warning about
+        filled points is said once however often the map is used)."""
+        cached = self.__dict__.get("_native")
+        if cached is not None:
+            return cached
+        # parse_case and the roughness study each build a source of the same case: the
+        # last map read is kept, keyed by the file's identity and the settings
+        stat = self.path.stat()
+        key = (str(self.path.resolve()), stat.st_mtime_ns, stat.st_size, self.fill_undefined,
+               self.short_cutoff, self.long_cutoff, self.size)
+        if _LAST_NATIVE.get("key") == key:
+            object.__setattr__(self, "_native", _LAST_NATIVE["map"])
+            return _LAST_NATIVE["map"]
+        s = read_surface(self.path, key="topography_file", fill_undefined=self.fill_undefined,
+                         label=self.label, size=self.size)
         if self.short_cutoff is not None or self.long_cutoff is not None:
             s = filter_surface(s, self.short_cutoff, self.long_cutoff)
-            if not s.rms_height > 0:
+            if s.flat:
+                lo = f"{self.short_cutoff:g} m" if self.short_cutoff is not None else "0"
+                hi = f"{self.long_cutoff:g} m" if self.long_cutoff is not None else "the map"
                 raise InputError("short_cutoff" if self.short_cutoff is not None else
                                  "long_cutoff", f"keeps no wavelength of {self.path.name} "
-                                 f"(wavelengths {self.short_cutoff} to {self.long_cutoff} m "
-                                 "leave a flat surface)")
+                                 f"(wavelengths from {lo} to {hi} leave a flat surface; the "
+                                 f"map spans {2 * s.pixel:.3g} m to {max(s.size):.3g} m)")
+        object.__setattr__(self, "_native", s)   # frozen: the cache is not a field
+        _LAST_NATIVE.update(key=key, map=s)
+        return s
+
+    def surface(self) -> SurfaceMap:
+        """The filtered map on the BEM grid (refused when its BEM would not fit in memory)."""
+        s = self.native()
+        n = self.bem_grid or max(s.grid)
+        check_bem_memory("bem_grid" if self.bem_grid else "topography_file", n)
         return resample(s, self.bem_grid) if self.bem_grid else s
 
     def pressures(self, p_max: float) -> np.ndarray:
@@ -738,9 +912,24 @@ class TopographySource:
         hi = 1.25 * p_max
         return np.geomspace(hi * 1e-3, hi, self.bem_loads)
 
+    def check_pressure(self, p_max: float, surface: SurfaceMap | None = None) -> None:
+        """Refuse (``nominal_area``) BEM pressures up to 1.25 ``p_max`` (Pa) beyond the
+        complete contact of the map on the BEM grid: there the approach stops changing, the
+        normal law ends and the BEM cannot converge."""
+        s = self.surface() if surface is None else surface
+        p_full = s.complete_contact_pressure(self.contact_modulus)
+        if 1.25 * p_max >= p_full:
+            raise InputError("nominal_area", f"the BEM would press the surface up to "
+                             f"{1.25 * p_max:.3g} Pa (1.25 x largest load / nominal_area), "
+                             f"beyond its complete contact at {p_full:.3g} Pa, where the "
+                             "rough law ends; increase nominal_area or reduce the loads")
+
     def law(self, P_max: float) -> tuple[BEMLaw, Path | None, bool]:
-        """The (cached) BEM law covering loads up to ``P_max`` (N)."""
-        return cached_bem_normal_law(self.surface(), self.contact_modulus,
+        """The (cached) BEM law covering loads up to ``P_max`` (N): the one law of the joint
+        that ``slipcycle run`` and ``slipcycle roughness`` both use."""
+        surface = self.surface()
+        self.check_pressure(P_max / self.nominal_area, surface)
+        return cached_bem_normal_law(surface, self.contact_modulus,
                                      self.pressures(P_max / self.nominal_area))
 
     def profile(self, P_max: float, n_points: int):
@@ -750,7 +939,15 @@ class TopographySource:
         -------
         Tabulated or RoughExponential
         """
-        law = self.law(P_max)[0]
+        return self.profile_of(self.law(P_max)[0], n_points)
+
+    def profile_of(self, law: BEMLaw, n_points: int):
+        """The slider-bed law of a BEM law: its convex table, or its fitted exponential.
+
+        Returns
+        -------
+        Tabulated or RoughExponential
+        """
         if self.fit == "table":
             return smooth_table(law, self.nominal_area, n_points)
         fit = fit_exponential(law.pressure, law.approach, self.fit_tolerance)
@@ -762,7 +959,8 @@ class TopographySource:
 
 #: keys of ``[halfspace]`` read for ``profile = "topography"`` (besides E, nu, friction, ...)
 SOURCE_KEYS = ("topography_file", "nominal_area", "fit", "bem_grid", "bem_loads",
-               "fit_tolerance", "short_cutoff", "long_cutoff", "fill_undefined")
+               "fit_tolerance", "short_cutoff", "long_cutoff", "fill_undefined",
+               "topography_size")
 
 
 def read_source(sec, contact_modulus: float) -> TopographySource:
@@ -772,7 +970,9 @@ def read_source(sec, contact_modulus: float) -> TopographySource:
     (``"table"`` default, or ``"exponential"``), ``bem_grid`` (points per side),
     ``bem_loads`` (default 24), ``fit_tolerance`` (default 0.1), ``short_cutoff`` and
     ``long_cutoff`` [m] (wavelength filter), ``fill_undefined`` (default false: undefined
-    height points are refused with their count; true interpolates them).
+    height points are refused with their count; true interpolates them),
+    ``topography_size`` ([Lx, Ly] in m, for NPY files and plain-text matrices, which give no
+    size).
 
     Raises
     ------
@@ -782,6 +982,9 @@ def read_source(sec, contact_modulus: float) -> TopographySource:
     def opt_int(key):
         return sec.int(key, ge=1) if sec.has(key) else None
 
+    size = sec.array("topography_size", None, shape=(2,), gt=0.0)
+    size = None if size is None else (float(size[0]), float(size[1]))
+
     settings = dict(
         path=sec.path("topography_file"), nominal_area=sec.float("nominal_area", gt=0.0),
         contact_modulus=contact_modulus,
@@ -790,7 +993,8 @@ def read_source(sec, contact_modulus: float) -> TopographySource:
         fit_tolerance=sec.float("fit_tolerance", 0.1),
         short_cutoff=sec.float("short_cutoff", None, gt=0.0),
         long_cutoff=sec.float("long_cutoff", None, gt=0.0),
-        fill_undefined=sec.bool("fill_undefined", False))
+        fill_undefined=sec.bool("fill_undefined", False), label=sec.key("topography_file"),
+        size=size)
     try:
         source = TopographySource(**settings)
         source.surface()            # the file's units, undefined points, flatness: now

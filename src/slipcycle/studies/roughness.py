@@ -28,6 +28,7 @@ The case is a ``model = "halfspace"`` case with ``profile = "topography"`` and a
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass, replace
 from typing import ClassVar
@@ -38,17 +39,18 @@ import xarray as xr
 from slipcycle.errors import InputError
 from slipcycle.halfspace.case import parse_case
 from slipcycle.halfspace.model import HalfspaceModel, solve
-from slipcycle.halfspace.profiles import FlatPunch, RoughExponential, Tabulated
+from slipcycle.halfspace.profiles import FlatPunch, RoughExponential
 from slipcycle.halfspace.topography import (
     BEMLaw,
     ExponentialFit,
     SurfaceMap,
     TopographySource,
     cached_bem_normal_law,
+    check_bem_memory,
     filter_surface,
     fit_exponential,
+    largest_normal_load,
     read_source,
-    read_surface,
     resample,
     smooth_table,
 )
@@ -61,6 +63,8 @@ from slipcycle.plot.roughness import (
     normal_law,
 )
 from slipcycle.result import StudyResult
+
+log = logging.getLogger("slipcycle")
 
 __all__ = ["RoughnessSettings", "RoughnessResult", "cutoff_within", "local_dissipation",
            "parse_roughness_case", "punch_rings", "roughness_study"]
@@ -146,16 +150,16 @@ def parse_roughness_case(case):
     sliders = sliders if isinstance(sliders, int) and sliders >= 40 else 2000
 
     def wavelengths(key):
-        return sec.array(key, shape=(None,), gt=0.0) if sec.has(key) else None
+        return _nonempty(sec, key, sec.array(key, shape=(None,), gt=0.0)) if sec.has(key) \
+            else None
 
     try:
         settings = RoughnessSettings(
             short_cutoffs=wavelengths("short_cutoffs"), long_cutoffs=wavelengths("long_cutoffs"),
-            phases=sec.grid("phases", {"start": -np.pi, "stop": np.pi, "num": 13}),
-            grids=tuple(int(g) for g in sec.array(
-                "grids", [grid // 2, grid, 2 * grid], shape=(None,), ge=8)),
-            sliders=tuple(int(m) for m in sec.array(
-                "sliders", [sliders // 4, sliders // 2, sliders], shape=(None,), ge=10)),
+            phases=_nonempty(sec, "phases", sec.grid(
+                "phases", {"start": -np.pi, "stop": np.pi, "num": 13})),
+            grids=_counts(sec, "grids", [grid // 2, grid, 2 * grid], 8),
+            sliders=_counts(sec, "sliders", [sliders // 4, sliders // 2, sliders], 10),
             rings=sec.int("rings", 24), tolerance=sec.float("tolerance", 0.05))
     except InputError as exc:
         if isinstance(exc, CaseError):
@@ -172,7 +176,60 @@ def parse_roughness_case(case):
                         "Q0, Q1, phase), not a table")
     source = read_source(Section(halfspace, "halfspace", case.base_dir),
                          model.elasticity.contact_modulus)
+    _check_study_surfaces(model, source, settings)
     return model, source, settings
+
+
+def _check_study_surfaces(model: HalfspaceModel, source: TopographySource,
+                          settings: RoughnessSettings) -> None:
+    """Refuse, before any BEM, the study's filters that keep no wavelength of the map
+    (``roughness.short_cutoffs``, ``roughness.long_cutoffs``) and a fretting map whose rim
+    pressure is beyond complete contact (``roughness.rings``).
+
+    Raises
+    ------
+    CaseError
+    """
+    surface = source.surface()
+    try:
+        check_bem_memory("grids", max(settings.grids))
+    except InputError as exc:
+        raise CaseError("roughness.grids", exc.problem) from None
+    span = f"the map on its BEM grid spans {2 * surface.pixel:.3g} m to " \
+           f"{max(surface.size):.3g} m"
+    for key, short in (("short_cutoffs", True), ("long_cutoffs", False)):
+        for cut in [] if getattr(settings, key) is None else getattr(settings, key):
+            kept = filter_surface(surface, **{"short_cutoff" if short else "long_cutoff": cut})
+            if kept.flat:
+                raise CaseError(f"roughness.{key}", f"{cut:g} m keeps no wavelength ("
+                                f"{span}): the filtered surface is flat")
+    A = source.nominal_area
+    P_max = largest_normal_load(model.normal, model.protocol, model.steps_per_cycle)
+    rim = float(punch_rings(np.sqrt(A / np.pi), settings.rings)[2].max() * A)
+    try:
+        source.check_pressure(P_max / A * max(1.0, rim), surface)
+    except InputError as exc:
+        raise CaseError("roughness.rings", f"the rim ring of the fretting map carries "
+                        f"{rim:.3g} times the mean pressure: {exc.problem}") from None
+
+
+def _nonempty(sec: Section, key: str, values: np.ndarray) -> np.ndarray:
+    """``values`` of ``[roughness] key``, refused when the list is empty (the study would
+    have nothing to compute or plot on that axis)."""
+    if np.asarray(values).size == 0:
+        raise sec.error(key, "must hold at least one value, got an empty list")
+    return values
+
+
+def _counts(sec: Section, key: str, default: list[int], least: int) -> tuple[int, ...]:
+    """A non-empty list of counts (BEM grids, sliders) of ``[roughness]``, each an integer
+    >= ``least``: 32.7 is refused rather than truncated to 32 (a count written as a float,
+    ``1e3``, is accepted)."""
+    values = _nonempty(sec, key, sec.array(key, default, shape=(None,), ge=least))
+    bad = [v for v in values.tolist() if not float(v).is_integer()]
+    if bad:
+        raise sec.error(key, f"counts must be whole numbers, got {bad[0]!r}")
+    return tuple(int(v) for v in values)
 
 
 def cutoff_within(cutoffs: np.ndarray, ratio: np.ndarray, tolerance: float,
@@ -305,6 +362,66 @@ def _dissipation(model: HalfspaceModel, profile) -> float:
     return float(res.dissipation_per_cycle) if res.gross_slip is None else float("nan")
 
 
+def _exponential_dissipation(model: HalfspaceModel, fit: ExponentialFit) -> float:
+    """W (J) with the fitted exponential law; NaN, said once, when no window was found."""
+    if np.isfinite(fit.gamma_sigma):
+        return _dissipation(model, RoughExponential(fit.gamma_sigma))
+    log.warning("roughness: no load window where dP/dU = P/(gamma sigma) holds within "
+                "%.0f%% (fit_tolerance): gamma_sigma and the exponential law's dissipation "
+                "are NaN; the tabulated law is used", 100 * fit.tolerance)
+    return float("nan")
+
+
+def _phase_dependence(model: HalfspaceModel, profile, phases: np.ndarray) -> np.ndarray:
+    """W (J) of ``model`` with ``profile`` for each lag φ (rad) of the single-harmonic Q."""
+    W = np.empty(phases.size)
+    for k, ph in enumerate(phases):
+        tang = replace(model.tangential, phases=np.full_like(model.tangential.phases, -ph))
+        W[k] = _dissipation(replace(model, tangential=tang), profile)
+    return W
+
+
+def _cutoffs(surface: SurfaceMap, settings: RoughnessSettings
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """λ_s and λ_l of the study (m): the settings', or by default 7 from 4 pixels to half
+    the size and 6 from 8 pixels to two thirds of it."""
+    L = min(surface.size)
+    short, long_ = settings.short_cutoffs, settings.long_cutoffs
+    if short is None:
+        short = np.geomspace(4 * surface.pixel, L / 2, 7)
+    if long_ is None:
+        long_ = np.geomspace(8 * surface.pixel, L / 1.5, 6)
+    return short, long_
+
+
+def _fretting_map(model: HalfspaceModel, source: TopographySource, law: BEMLaw,
+                  factor: np.ndarray) -> tuple[np.ndarray, float]:
+    """Local dissipation of the punch rings and the smooth punch's own dissipation.
+
+    Parameters
+    ----------
+    law : BEMLaw
+        The rough law pressed up to the rim ring's pressure (per unit area).
+    factor : (R,) array
+        Traction factors of the rings (1/m², :func:`punch_rings`).
+
+    Returns
+    -------
+    W_ring : (R,) array
+        Dissipation per cycle per unit area (J/m²).
+    W_smooth : float
+        Dissipation per cycle of the smooth flat punch (J).
+    """
+    per_area = smooth_table(law, 1.0, model.n_sliders)
+    run = dict(steps_per_cycle=model.steps_per_cycle, max_cycles=model.max_cycles,
+               n_sliders=model.n_sliders, assembly_steps=model.assembly_steps)
+    W_ring, _ = local_dissipation(per_area, model.normal, model.tangential, factor,
+                                  friction=model.friction,
+                                  compliance_ratio=model.compliance_ratio, **run)
+    punch = FlatPunch(float(np.sqrt(source.nominal_area / np.pi)), source.contact_modulus)
+    return W_ring, _dissipation(model, punch)
+
+
 def roughness_study(model: HalfspaceModel, source: TopographySource,
                     settings: RoughnessSettings) -> RoughnessResult:
     """Run the study (module docstring) for a validated case.
@@ -327,18 +444,18 @@ def roughness_study(model: HalfspaceModel, source: TopographySource,
     P0 = float(model.normal.mean[0])
     p0 = P0 / A
     rings = punch_rings(np.sqrt(A / np.pi), settings.rings)
-    P_max = float(np.max(model.normal(np.linspace(0, 2 * np.pi, 257))[:, 0]))
-    # BEM pressures: up to the largest local pressure of the punch map
-    pressures = source.pressures(P_max / A * max(1.0, float(rings[2].max() * A)))
-    native = read_surface(source.path, key="topography_file")
-    if source.short_cutoff is not None or source.long_cutoff is not None:
-        native = filter_surface(native, source.short_cutoff, source.long_cutoff)
-    grid = source.bem_grid or native.grid[0]
-    base_surface = resample(native, grid)
+    # the joint's law is the one `slipcycle run` solves (same largest load, same BEM
+    # pressures, same cache file): pressing to the punch rim instead moved the PCHIP points
+    # and gave another W (142.7 against 143.3 µJ for the example); only the fretting map
+    # needs the law up to the largest local pressure (punch rim)
+    P_max = largest_normal_load(model.normal, model.protocol, model.steps_per_cycle)
+    pressures = source.pressures(P_max / A)
+    rim_pressures = source.pressures(P_max / A * max(1.0, float(rings[2].max() * A)))
+    native, base_surface = source.native(), source.surface()
     cache: list[str] = []
 
-    def law_of(surface: SurfaceMap) -> BEMLaw:
-        law, path, _ = cached_bem_normal_law(surface, source.contact_modulus, pressures)
+    def law_of(surface: SurfaceMap, p: np.ndarray = pressures) -> BEMLaw:
+        law, path, _ = cached_bem_normal_law(surface, source.contact_modulus, p)
         if path is not None:
             cache.append(str(path))
         return law
@@ -353,62 +470,46 @@ def roughness_study(model: HalfspaceModel, source: TopographySource,
     fit = fit_exponential(base.pressure, base.approach, source.fit_tolerance)
     ref = point(base)
     table = smooth_table(base, A, n_sl)
-    W_exp = (_dissipation(model, RoughExponential(fit.gamma_sigma))
-             if np.isfinite(fit.gamma_sigma) else float("nan"))
-
-    # phase dependence (single-harmonic Q)
-    W_phase = np.empty(settings.phases.size)
-    for k, ph in enumerate(settings.phases):
-        tang = replace(model.tangential, phases=np.full_like(model.tangential.phases, -ph))
-        W_phase[k] = _dissipation(replace(model, tangential=tang), table)
+    W_exp = _exponential_dissipation(model, fit)
+    W_phase = _phase_dependence(model, table, settings.phases)
 
     # convergence in the BEM grid and in the slider count
     conv_grid = [point(law_of(resample(native, g))) for g in settings.grids]
     W_sliders = np.array([_dissipation(model, smooth_table(base, A, m))
                           for m in settings.sliders])
 
-    # wavelength filters; defaults span 4 pixels to half the size, and the size to 8 pixels
     L = min(base_surface.size)
-    short = settings.short_cutoffs
-    if short is None:
-        short = np.geomspace(4 * base_surface.pixel, L / 2, 7)
-    long_ = settings.long_cutoffs
-    if long_ is None:
-        long_ = np.geomspace(8 * base_surface.pixel, L / 1.5, 6)
+    short, long_ = _cutoffs(base_surface, settings)
     pts_short = [point(law_of(filter_surface(base_surface, short_cutoff=s))) for s in short]
     pts_long = [point(law_of(filter_surface(base_surface, long_cutoff=s))) for s in long_]
 
     # local fretting map of the flat punch (rough law per unit area) and its smooth twin
     r_mid, r_area, factor = rings
-    per_area = Tabulated(table.U, table.P / A)
-    run = dict(steps_per_cycle=model.steps_per_cycle, max_cycles=model.max_cycles,
-               n_sliders=n_sl, assembly_steps=model.assembly_steps)
-    W_ring, _ = local_dissipation(per_area, model.normal, model.tangential, factor,
-                                  friction=model.friction,
-                                  compliance_ratio=model.compliance_ratio, **run)
-    punch = FlatPunch(float(np.sqrt(A / np.pi)), source.contact_modulus)
-    W_smooth = _dissipation(model, punch)
-
-    def arr(points, name):
-        return np.array([getattr(p, name) for p in points])
+    W_ring, W_smooth = _fretting_map(model, source, law_of(base_surface, rim_pressures),
+                                     factor)
 
     return RoughnessResult(
         wall_time_s=time.perf_counter() - t0, nominal_area=A, P0=P0,
         friction=model.friction, compliance_ratio=model.compliance_ratio,
-        size=float(L), grid=int(grid), rms_height=base.rms_height, law=base, fit=fit,
-        dissipation=ref.W, dissipation_exponential=W_exp, stiffness=ref.stiffness,
+        size=float(L), grid=int(base_surface.grid[0]), rms_height=base.rms_height, law=base,
+        fit=fit, dissipation=ref.W, dissipation_exponential=W_exp, stiffness=ref.stiffness,
         phases=settings.phases, dissipation_phase=W_phase,
-        grids=np.array(settings.grids), dissipation_grid=arr(conv_grid, "W"),
-        stiffness_grid=arr(conv_grid, "stiffness"),
-        gamma_sigma_grid=arr(conv_grid, "gamma_sigma"),
+        grids=np.array(settings.grids), **_columns("grid", conv_grid),
         sliders=np.array(settings.sliders), dissipation_sliders=W_sliders,
-        short_cutoffs=short, dissipation_short=arr(pts_short, "W"),
-        stiffness_short=arr(pts_short, "stiffness"),
-        long_cutoffs=long_, dissipation_long=arr(pts_long, "W"),
-        stiffness_long=arr(pts_long, "stiffness"), tolerance=settings.tolerance,
-        ring_radius=r_mid, ring_area=r_area, ring_factor=factor,
+        short_cutoffs=short, **_columns("short", pts_short, gamma_sigma=False),
+        long_cutoffs=long_, **_columns("long", pts_long, gamma_sigma=False),
+        tolerance=settings.tolerance, ring_radius=r_mid, ring_area=r_area, ring_factor=factor,
         ring_dissipation=W_ring, smooth_dissipation=W_smooth,
         cache_files=tuple(dict.fromkeys(cache)))
+
+
+def _columns(suffix: str, points: list[_Point], gamma_sigma: bool = True) -> dict:
+    """``dissipation_<suffix>`` (J), ``stiffness_<suffix>`` (N/m) and, with
+    ``gamma_sigma``, ``gamma_sigma_<suffix>`` (m) of a list of law points."""
+    names = ("W", "stiffness", "gamma_sigma") if gamma_sigma else ("W", "stiffness")
+    field_of = {"W": "dissipation", "stiffness": "stiffness", "gamma_sigma": "gamma_sigma"}
+    return {f"{field_of[n]}_{suffix}": np.array([getattr(p, n) for p in points])
+            for n in names}
 
 
 _UNITS = {"pressure": "Pa", "approach": "m", "contact_fraction": "1", "gamma_sigma": "m"}
@@ -465,7 +566,8 @@ class RoughnessResult(StudyResult):
 
     model: ClassVar[str] = "halfspace"
     analysis: ClassVar[str] = "roughness"
-    FLAGS: ClassVar[dict] = {"model": ("halfspace",), "analysis": ("roughness",)}
+    FLAGS: ClassVar[dict] = {"model": ("halfspace",), "analysis": ("roughness",),
+                             "exponential_fit": ("found", "none")}
 
     nominal_area: float
     P0: float
@@ -527,6 +629,13 @@ class RoughnessResult(StudyResult):
                              self.tolerance, False)
 
     @property
+    def exponential_fit(self) -> str:
+        """``"found"``, or ``"none"`` when no window of 3 BEM loads has dP/dU = P/(γσ)
+        within the fit tolerance (γσ, γ and Ŵ are then NaN in ``result.nc``, null in
+        ``summary.json``)."""
+        return "found" if np.isfinite(self.fit.gamma_sigma) else "none"
+
+    @property
     def fretting_map_total(self) -> float:
         """Σ W_i area_i of the punch map (J per cycle)."""
         return float(np.nansum(self.ring_dissipation * self.ring_area))
@@ -574,6 +683,7 @@ class RoughnessResult(StudyResult):
         s = {
             "model": "halfspace", "analysis": "roughness",
             "gamma_sigma": _num(gs), "gamma": _num(gs / self.rms_height),
+            "exponential_fit": self.exponential_fit,
             "rms_height": self.rms_height, "surface_size": L, "bem_grid": self.grid,
             "fit_tolerance": f.tolerance, "fit_max_deviation": _num(f.max_deviation),
             "exponential_fit_pressure_range": [_num(lo), _num(hi)],
@@ -653,9 +763,12 @@ class RoughnessResult(StudyResult):
              "local dissipation per cycle per unit area (rough law)")]
         for name, dim, values, unit, long_name in add:
             ds[name] = (dim, np.asarray(values), {"units": unit, "long_name": long_name})
-        ds.attrs.update(gamma_sigma=_num(f.gamma_sigma), nominal_area=self.nominal_area,
-                        P0=self.P0, dissipation_per_cycle=_num(self.dissipation),
-                        smooth_dissipation=_num(self.smooth_dissipation))
+        # netCDF attributes cannot be null: a missing number is NaN, and a missing fit is
+        # said in words (exponential_fit) so that NaN is never mistaken for a result
+        ds.attrs.update(gamma_sigma=float(f.gamma_sigma), nominal_area=self.nominal_area,
+                        P0=self.P0, dissipation_per_cycle=float(self.dissipation),
+                        smooth_dissipation=float(self.smooth_dissipation),
+                        exponential_fit=self.exponential_fit)
         return ds
 
     def figures(self, dataset: xr.Dataset | None = None) -> dict:

@@ -10,6 +10,7 @@ carry its map) and are not used: Ŵ is dimensionless; W = λ_c γσ f² P0 Ŵ.
 
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass
 from typing import ClassVar
@@ -23,6 +24,8 @@ from slipcycle.io import CaseError, RunOutputs
 from slipcycle.io.sizes import check_memory, memory_limit
 from slipcycle.plot.halfspace import w_hat_cubic_law, w_hat_vs_phase
 from slipcycle.result import StudyResult
+
+log = logging.getLogger("slipcycle")
 
 __all__ = ["map_memory_estimate", "parse_map_case", "w_hat_study", "w_hat_map_study",
            "WHatMapResult",
@@ -103,6 +106,9 @@ def parse_map_case(case):
                   le=2 * np.pi)
     fig_P1 = sec.float("fig7_P1_hat", 0.4, ge=0.0, lt=1.0)
     fig_Q1 = np.atleast_1d(sec.array("fig7_Q1_hat", [0.2, 0.4, 0.6, 0.8], ge=0.0, le=1.0))
+    for key, axis in (("P1_hat", P1), ("Q1_hat", Q1), ("phase", ph), ("fig7_Q1_hat", fig_Q1)):
+        if axis.size == 0:   # a map of no points writes files that hold nothing
+            raise sec.error(key, "must hold at least one value, got an empty list")
     run = case.section("run", required=False)
     settings = {"steps_per_cycle": run.int("steps_per_cycle", 200, ge=16),
                 "n_sliders": run.int("sliders", 100, ge=10)}
@@ -180,15 +186,43 @@ def w_hat_map_study(P1: np.ndarray, Q1: np.ndarray, ph: np.ndarray, fig_P1: floa
         ``figures``: ``w_hat_vs_phase`` and ``w_hat_cubic_law``.
     """
     t0 = time.perf_counter()
-    W = w_hat_map(P1, Q1, ph, **settings)
-    # Fig. 7 curves and the cubic law on their own fine grids
+    # Fig. 7 curves first: when every one reaches gross slip there is nothing to draw, and
+    # the case is refused before the (larger) map runs
     W7 = w_hat_map([fig_P1], fig_Q1, FIG7_PHASE, **settings)[0]
+    _gross_slip_curves(fig_P1, fig_Q1, W7)   # refuses, or warns about, empty curves
+    W = w_hat_map(P1, Q1, ph, **settings)
     W_small = w_hat_map([0.0], CUBIC_LAW_Q1_HAT, [0.0], **settings)[0, :, 0]
     return WHatMapResult(wall_time_s=time.perf_counter() - t0, P1_hat=P1, Q1_hat=Q1,
                          phase=ph, W_hat=W, fig7_P1_hat=fig_P1, fig7_Q1_hat=fig_Q1,
                          fig7_phase=FIG7_PHASE, fig7_W_hat=W7,
                          cubic_law_Q1_hat=CUBIC_LAW_Q1_HAT, cubic_law_W_hat=W_small,
                          settings=settings)
+
+
+def _gross_slip_curves(fig_P1: float, fig_Q1: np.ndarray, W7: np.ndarray) -> list[float]:
+    """Q̂1 of the Fig. 7 curves that reach gross slip at every phase (Ŵ all NaN).
+
+    Refuses (``map.fig7_Q1_hat``) when that is every curve, and says on stderr which
+    curves are left out when it is some of them. No gross slip at any phase needs
+    Q̂1 < 1 − P̂1 (the smallest normal load is (1 − P̂1) P0).
+
+    Returns
+    -------
+    list of float
+        Q̂1 [1] of the curves without a value.
+    """
+    empty = [float(q) for q, w in zip(fig_Q1, W7, strict=True) if not np.any(np.isfinite(w))]
+    if not empty:
+        return empty
+    hint = f"Q̂1 < 1 − P̂1 = {1 - fig_P1:.3g} never slips grossly"
+    if len(empty) == fig_Q1.size:
+        raise CaseError("map.fig7_Q1_hat", f"every Fig. 7 curve (Q̂1 = "
+                        f"{', '.join(f'{q:g}' for q in empty)}) at fig7_P1_hat = {fig_P1:g} "
+                        f"reaches gross slip at every phase: nothing to draw; {hint}")
+    log.warning("map: the Fig. 7 curves Q̂1 = %s reach gross slip at every phase at "
+                "fig7_P1_hat = %g and are not drawn (%s)", ", ".join(f"{q:g}" for q in empty),
+                fig_P1, hint)
+    return empty
 
 
 _ATTRS = {"units": "1", "long_name": "W / (lambda_c gamma_sigma f^2 P0), nan: gross slip"}
@@ -262,7 +296,11 @@ class WHatMapResult(StudyResult):
             ``fig7_W_hat_max`` per Q̂1 (keyed by ``str(Q̂1)``), ``units``.
         """
         W, W7, q = self.W_hat, self.fig7_W_hat, self.fig7_Q1_hat
-        i_max = np.nanargmax(W7, axis=1)
+        # a curve in gross slip at every phase has no maximum: null, not an error
+        drawn = np.any(np.isfinite(W7), axis=1)
+        i_max = [int(np.nanargmax(w)) if ok else None for w, ok in zip(W7, drawn, strict=True)]
+        phase_max = [float(self.fig7_phase[i]) if i is not None else None for i in i_max]
+        w_max = [float(np.nanmax(w)) if ok else None for w, ok in zip(W7, drawn, strict=True)]
         return {
             "model": "halfspace",
             "analysis": "w_hat_map",
@@ -272,15 +310,14 @@ class WHatMapResult(StudyResult):
             "settings": self.settings,
             "cubic_law_slope": self.cubic_law_slope,
             "fig7_P1_hat": self.fig7_P1_hat,
-            "fig7_phase_of_max": dict(zip(map(str, q), self.fig7_phase[i_max].tolist(),
-                                          strict=True)),
-            "fig7_W_hat_max": dict(zip(map(str, q), np.nanmax(W7, axis=1).tolist(),
-                                       strict=True)),
+            "fig7_phase_of_max": dict(zip(map(str, q), phase_max, strict=True)),
+            "fig7_W_hat_max": dict(zip(map(str, q), w_max, strict=True)),
+            "fig7_gross_slip_Q1_hat": [float(v) for v in q[~drawn]],
             "dissipation_per_cycle": None,
             "units": {"grid_points": "1", "gross_slip_points": "1", "wall_time_s": "s",
                       "settings.steps_per_cycle": "1", "settings.n_sliders": "1",
                       "cubic_law_slope": "1", "fig7_P1_hat": "1", "fig7_phase_of_max": "rad",
-                      "fig7_W_hat_max": "1"},
+                      "fig7_W_hat_max": "1", "fig7_gross_slip_Q1_hat": "1"},
         }
 
     def _build_dataset(self) -> xr.Dataset:
@@ -316,9 +353,11 @@ class WHatMapResult(StudyResult):
         dict of str to callable
         """
         # the plot takes the Fig. 7 curves as a (P1_hat, Q1_hat, phase) array
-        curves = {"P1_hat": [self.fig7_P1_hat], "Q1_hat": self.fig7_Q1_hat,
+        # curves in gross slip at every phase have nothing to draw (listed in the summary)
+        drawn = np.any(np.isfinite(self.fig7_W_hat), axis=1)
+        curves = {"P1_hat": [self.fig7_P1_hat], "Q1_hat": self.fig7_Q1_hat[drawn],
                   "phase": self.fig7_phase}
-        W7 = self.fig7_W_hat[None]
+        W7 = self.fig7_W_hat[drawn][None]
 
         def vs_phase():
             fig7 = xr.Dataset({"W_hat": (("P1_hat", "Q1_hat", "phase"), W7, _ATTRS)},
