@@ -340,3 +340,32 @@ def test_bem_grid_beyond_the_memory_budget_is_refused_before_work(rough, run_cli
     case.write_text(case.read_text().replace("bem_grid = 4096\n", ""))
     _refused(run_cli, "run", case, rough / "out", "halfspace.topography_file")
     assert not list(rough.glob("cache/bem-*.npz"))   # refused before any BEM
+
+
+def test_a_table_file_gives_one_law_whatever_its_units_encoding_and_name(tmp_path):
+    """A netCDF table in micrometres was read as metres (D 1e6 too large), a spreadsheet's
+    CSV with a byte-order mark was refused, and a netCDF file named .dat was read as
+    text: all now give the D of the plain CSV in SI units."""
+    import slipcycle
+
+    U = np.array([0.0, 1e-7, 3e-7, 1e-6, 3e-6])
+    P = np.array([0.0, 10.0, 40.0, 150.0, 500.0])
+    rows = "U,P\n" + "".join(f"{float(u)!r},{float(p)!r}\n" for u, p in zip(U, P, strict=True))
+    (tmp_path / "plain.csv").write_text(rows, encoding="utf-8")
+    (tmp_path / "bom.csv").write_text(rows, encoding="utf-8-sig")
+    xr.Dataset({"U": ("k", U * 1e6, {"units": "um"}),
+                "P": ("k", P, {"units": "N"})}).to_netcdf(tmp_path / "micro.nc")
+    xr.Dataset({"U": ("k", U), "P": ("k", P)}).to_netcdf(tmp_path / "table.dat")
+
+    def run(name):
+        text = (f'model = "halfspace"\n[halfspace]\nprofile = "tabulated"\n'
+                f'table_file = "{name}"\ncompliance_ratio = 1.2142857142857144\n'
+                "friction = 0.5\n[loading]\nP0 = 100.0\nQ1 = 30.0\n[run]\ncycles = 3\n"
+                "steps_per_cycle = 200\nsliders = 200\n")
+        (tmp_path / "case.toml").write_text(text)
+        return slipcycle.run(tmp_path / "case.toml").dissipation_per_cycle
+
+    ref = run("plain.csv")
+    assert ref > 0
+    for name in ("bom.csv", "micro.nc", "table.dat"):
+        assert run(name) == pytest.approx(ref, rel=1e-12), name

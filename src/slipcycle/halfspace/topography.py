@@ -745,6 +745,32 @@ def smooth_table(law: BEMLaw, nominal_area: float, n_points: int) -> Tabulated:
     return Tabulated(U, P)
 
 
+#: the units a P(U) table's netCDF variables may carry (``units`` attribute), in SI
+_TABLE_UNITS = {"U": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1e-6,
+                      "nm": 1e-9},
+                "P": {"N": 1.0, "kN": 1e3, "mN": 1e-3}}
+
+
+def _is_netcdf(path: Path) -> bool:
+    """Whether ``path`` is a netCDF file (classic or HDF5), by its first bytes, whatever
+    its extension."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(8)
+    except OSError:
+        return path.suffix.lower() in (".nc", ".nc4", ".netcdf")
+    return head.startswith(b"CDF") or head.startswith(b"\x89HDF")
+
+
+def _in_si(var, units: dict, key: str, path: Path) -> np.ndarray:
+    """A table variable in SI units from its ``units`` attribute (none: SI already)."""
+    unit = str(var.attrs.get("units", "")).strip()
+    if unit and unit not in units:
+        raise InputError(key, f"{path.name}: variable {var.name} has units {unit!r}; "
+                         f"known: {', '.join(units)}")
+    return np.asarray(var.values, float) * units.get(unit, 1.0)
+
+
 def read_table_file(path: Path, key: str = "table_file") -> tuple[np.ndarray, np.ndarray]:
     """A tabulated P(U) from a CSV (header naming ``U`` and ``P``) or netCDF file.
 
@@ -752,7 +778,9 @@ def read_table_file(path: Path, key: str = "table_file") -> tuple[np.ndarray, np
     ----------
     path : Path
         ``.csv`` with a header line holding columns ``U`` [m] and ``P`` [N] (other columns
-        ignored), or ``.nc`` with variables ``U`` and ``P``.
+        ignored; a leading byte-order mark is skipped), or netCDF (recognised by its
+        content) with variables ``U`` and ``P``, in m and N unless their ``units``
+        attribute says mm, um, nm / kN, mN.
     key : str
         Case-file key blamed for problems.
 
@@ -762,12 +790,14 @@ def read_table_file(path: Path, key: str = "table_file") -> tuple[np.ndarray, np
         Unchecked values (the case reader checks them like inline tables).
     """
     try:
-        if path.suffix.lower() in (".nc", ".nc4", ".netcdf"):
+        if _is_netcdf(path):
             with xr.open_dataset(path) as ds:
-                U, P = np.asarray(ds["U"].values, float), np.asarray(ds["P"].values, float)
+                U = _in_si(ds["U"], _TABLE_UNITS["U"], key, path)
+                P = _in_si(ds["P"], _TABLE_UNITS["P"], key, path)
         else:
+            # utf-8-sig: a spreadsheet's CSV starts with a byte-order mark
             data = np.genfromtxt(path, delimiter=",", names=True, dtype=float,
-                                 deletechars="", autostrip=True)
+                                 deletechars="", autostrip=True, encoding="utf-8-sig")
             names = data.dtype.names or ()
             if "U" not in names or "P" not in names:
                 raise ValueError(f"needs a header with columns U and P, found {names}")
