@@ -43,7 +43,13 @@ def execute(args: argparse.Namespace) -> int:
     if unknown:
         raise CaseError(unknown[0], "is not a shipped example; 'slipcycle examples' lists "
                         "them")
+    if args.force and args.copy is None:
+        raise CaseError("--force", "only applies with --copy DIR (it replaces the files of "
+                        "the same name there)")
     if args.copy is not None:
+        if args.copy.exists() and not args.copy.is_dir():
+            raise CaseError("--copy", f"{args.copy} is a file, not a folder; give a folder "
+                            "to copy the examples into")
         try:
             written = copy_examples(args.copy, names or None, overwrite=args.force)
         except FileExistsError as exc:

@@ -63,14 +63,32 @@ def execute(args: argparse.Namespace) -> int:
                         "discrete3d case")
     if args.out.suffix.lower() != ".npz":
         raise CaseError("--out", f"must name an .npz file, got {args.out}")
+    _refuse_same_files(args, CaseError)
     if suffix in (".mtx", ".npz"):
         if args.case is not None:
             raise CaseError("--case", "needs a model file with [fe.discrete], "
                                       "not imported matrices")
         info = import_stiffness(args.model, args.out, args.dof_order)
     else:
+        if args.dof_order is not None:  # an FE model knows its own DOF order
+            raise CaseError("--dof-order", "applies to imported .mtx/.npz matrices only, "
+                            f"not to a model file ({args.model})")
         info = reduce_model(args.model, args.out, args.case)
     if not args.quiet:
         print(json.dumps(to_jsonable(info), indent=2, default=str))
         print(f"reduced model written to {args.out}")
     return 0
+
+
+def _same(a: Path, b: Path) -> bool:
+    """Whether two paths name the same file (resolved: ./x.npz and x.npz are one)."""
+    return a.expanduser().resolve() == b.expanduser().resolve()
+
+
+def _refuse_same_files(args: argparse.Namespace, error) -> None:
+    """``--case`` must not be the ``--out``: the case file would replace the .npz and name
+    itself as its stiffness_file (``--out`` equal to the input is refused where it is
+    written, like ``--case`` equal to the input)."""
+    if args.case is not None and _same(args.case, args.out):
+        raise error("--case", f"is the same file as --out ({args.out}); give the case "
+                    "file its own name (e.g. discrete.toml)")

@@ -71,6 +71,9 @@ def _matrices(sec: Section) -> tuple[dict, dict]:
         return mats, keys
     A = sec.array("A", shape=(None, None))
     n = A.shape[0]
+    if A.size == 0 or A.shape[1] != n:  # B and C take their shape from A: blame A first
+        raise sec.error("A", f"must be a square N×N matrix with N >= 1, got "
+                        f"{A.shape[0]}×{A.shape[1]}")
     B = sec.array("B", shape=(n, n))
     C = sec.array("C", shape=(n, n))
     return {"A": A, "B": B, "C": C}, {k: sec.key(k) for k in ("A", "B", "C")}
@@ -139,6 +142,23 @@ def _initial_state_error(sec: Section, ld: Section, exc, r0: np.ndarray, n: int)
 _SYSTEM_KEYS = ("A", "B", "C", "friction", "accept_ill_posed", "f_crit_exact_max_nodes")
 
 
+#: fewest load samples per cycle: below, a cycle cannot resolve a harmonic load (one
+#: sample sees a constant load: shakedown with D = 0 whatever the loads); the
+#: ``[fe.discrete]`` table that writes discrete cases has the same floor
+MIN_STEPS_PER_CYCLE = 4
+
+
+def _check_run(rn: Section, run: RunSettings) -> None:
+    """Refuse ``[run]`` settings that cannot give a meaningful cycle, naming the key."""
+    if run.steps_per_cycle < MIN_STEPS_PER_CYCLE:
+        raise rn.error("steps_per_cycle", f"must be >= {MIN_STEPS_PER_CYCLE} (load samples "
+                       f"per cycle; fewer cannot follow a periodic load), got "
+                       f"{run.steps_per_cycle}")
+    if run.min_cycles > run.cycles:
+        raise rn.error("min_cycles", f"must be <= cycles ({run.cycles}): the run stops after "
+                       f"{run.cycles} cycles, got {run.min_cycles}")
+
+
 def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     """Read and validate every key of a discrete case; no computation beyond checks.
 
@@ -182,6 +202,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
                         load_cases(ld, n, lam, 1, file_case))
     rn = case.section("run", required=False)
     run = RunSettings(**run_settings(rn))
+    _check_run(rn, run)
     case.finish()
 
     # -- sizes: refuse what cannot be allocated, before any work --------------------------

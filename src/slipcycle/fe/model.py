@@ -136,6 +136,33 @@ def _load_specs(fe: Section, dims: int) -> list[dict]:
     return loads
 
 
+def _refuse_void_loads(loads: list[dict], clamped: list[str]) -> None:
+    """Refuse a load case that cannot put any force on the contact.
+
+    A boundary held in every case (clamped, or moved by a displacement case) carries a
+    traction on it into the support, and a displacement case on a clamped boundary is held
+    at 0 (the first held boundary wins): the case would be identically zero, and so would a
+    zero vector. Each is refused naming the key of the load case.
+    """
+    moved = {d["boundary"]: i for i, d in enumerate(loads) if "displacement" in d}
+    for i, d in enumerate(loads):
+        key = f"fe.load_case[{i}]"
+        kind = "traction" if "traction" in d else "displacement"
+        b = d["boundary"]
+        if not np.any(np.asarray(d[kind], float)):
+            raise CaseError(f"{key}.{kind}", "is zero in every component: the case puts no "
+                            "force on the contact")
+        if kind == "displacement" and b in clamped:
+            raise CaseError(f"{key}.boundary", f"{b!r} is also clamped (fe.mesh.clamped), "
+                            "so it is held at 0: the displacement case puts no force on the "
+                            "contact")
+        if kind == "traction" and (b in clamped or b in moved):
+            by = ("clamped (fe.mesh.clamped)" if b in clamped else
+                  f"held by the displacement case fe.load_case[{moved[b]}]")
+            raise CaseError(f"{key}.traction", f"acts on {b!r}, which is {by}: the support "
+                            "carries it and the case puts no force on the contact")
+
+
 def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem | MeshSolid:
     from slipcycle.fe.meshfile import check_planar, is_solid_mesh, read_meshio
 
@@ -160,6 +187,7 @@ def _mesh_problem(fe: Section, common: dict, case: Case) -> Problem | MeshSolid:
     loads = _load_specs(fe, dims)
     ms.finish()
     case.finish()
+    _refuse_void_loads(loads, raw)  # after the unknown keys, which may be its cause
     tags = {"contact": contact}
     tags.update({t: t for t in raw})
     tags.update({d["boundary"]: d["boundary"] for d in loads})

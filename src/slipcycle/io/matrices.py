@@ -271,6 +271,9 @@ def read_stiffness(path: str | Path, dof_order: str | None = None, *, check: boo
     suffix = path.suffix.lower()
     if suffix == ".npz":
         out = _read_npz(path)
+        for k in ("A", "B", "C", "K", "p_w", "q_w", "coords"):
+            if k in out:
+                _real(path, k, out[k])
         if "K" in out and "A" not in out:
             stated = str(out["dof_order"]) if "dof_order" in out else None
             order = _resolve_order(stated, dof_order, path.name)
@@ -448,6 +451,22 @@ class ReducedStiffness:
                 f"loads={list(self.loads)}, source={self.source!r}>")
 
 
+def _real(path: Path, name: str, arr: np.ndarray) -> np.ndarray:
+    """``arr`` if it holds real numbers (float or integer dtype); a string, complex or
+    boolean array is refused naming the file and the array, instead of being coerced
+    (strings parsed as numbers, the imaginary part dropped, booleans read as 0/1)."""
+    if arr.dtype.kind not in "fiu":
+        raise file_error(path, f"array {name} holds {arr.dtype} values "
+                         f"({_KIND_WORDS.get(arr.dtype.kind, 'not numbers')}); it must hold "
+                         "real numbers (float or integer)")
+    return arr
+
+
+#: what a non-real dtype kind holds, for the message of :func:`_real`
+_KIND_WORDS = {"U": "text", "S": "bytes", "c": "complex numbers", "b": "booleans",
+               "O": "objects", "M": "dates", "m": "time spans", "V": "raw records"}
+
+
 def _raw_npz(path: Path, keys: dict | None) -> RawMatrix:
     """An ``.npz``: blocks A, B, C (with loads, coordinates, frames) or a full K."""
     try:
@@ -461,15 +480,15 @@ def _raw_npz(path: Path, keys: dict | None) -> RawMatrix:
     if "tangential_dims" in data:
         stated["tangential_dims"] = int(data["tangential_dims"])
     if all(names[k] in data for k in ("A", "B", "C")):
-        extra = {k: data[names[k]] for k in ("A", "B", "C")}
+        extra = {k: _real(path, names[k], data[names[k]]) for k in ("A", "B", "C")}
         for k in ("p_w", "q_w", "load_cases", "coords", "normal", "tangent"):
             if k in data:
-                extra[k] = data[k]
+                extra[k] = data[k] if k == "load_cases" else _real(path, k, data[k])
         return RawMatrix(None, stated=stated, extra=extra, format="npz")
     if names["K"] in data:
         labels = data["dof_labels"] if "dof_labels" in data else None
-        return RawMatrix(np.asarray(data[names["K"]], float), labels=labels, stated=stated,
-                         format="npz")
+        return RawMatrix(np.asarray(_real(path, names["K"], data[names["K"]]), float),
+                         labels=labels, stated=stated, format="npz")
     missing = [names[k] for k in ("A", "B", "C") if names[k] not in data]
     raise file_error(path, f"lacks array(s) {', '.join(missing)} (or a full {names['K']})")
 

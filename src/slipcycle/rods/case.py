@@ -15,6 +15,7 @@ Keys of ``[run]``: steps_per_cycle (default 400), cycles (maximum, default 300),
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 from typing import ClassVar
@@ -26,6 +27,8 @@ from slipcycle.io import Case, RunOutputs, Section
 from slipcycle.io.sizes import MEMORY_LIMIT, check_memory, memory_limit
 from slipcycle.result import STEADY_STATES, RunResult, classify
 from slipcycle.rods.model import INTERFACES, Excitation, Rod, TwoRods
+
+log = logging.getLogger("slipcycle")
 
 __all__ = ["RodsCase", "RodsResult", "parse_case", "run_case", "solve_case", "solve_model",
            "analyse", "interface_bed", "RUN_UNITS", "RUN_FLAGS", "MEMORY_LIMIT"]
@@ -154,9 +157,7 @@ def parse_case(case: Case, *, finish: bool = True, limits: bool = False) -> Rods
     F0, f0_sec = _either(sec, load, "axial_force", None, ge=0.0)
     if F0 is None:
         raise sec.error("axial_force", "required key is missing (mean compressive force F0, N)")
-    if F0 <= 0.0 and iface != "welded":
-        raise f0_sec.error("axial_force", f"must be > 0 for a frictional interface "
-                           f"(interface = {iface!r}), got {F0:g}")
+    _check_frictional(iface, (sec, "friction", f), (f0_sec, "axial_force", F0))
     Fa = _either(sec, load, "axial_amplitude", 0.0, ge=0.0)[0]
     psi = _either(sec, load, "axial_phase", 0.0)[0]
     amp = load.float("rotation_amplitude", gt=0.0)
@@ -194,24 +195,40 @@ def parse_case(case: Case, *, finish: bool = True, limits: bool = False) -> Rods
     else:
         W = ratio * w1
     exc = Excitation(amp, W, F0, Fa, psi)
-    if iface == "welded" and zeta == 0.0 and not limits:  # `limits` marks poles instead
+    if zeta == 0.0 and not limits:  # `limits` marks poles instead
         _refuse_pole(rods, W, w1, load, "frequency_ratio" if has_r else "frequency")
     return RodsCase(rods, exc, ratio, w1, modes, rings, static_corr, K, cycles, tol, reg,
                     reg_pts, chi, beta)
 
 
-def _refuse_pole(rods: TwoRods, W: float, w1: float, load: Section, key: str) -> None:
-    """A welded, undamped system driven at a natural frequency has no steady state."""
-    from slipcycle.rods.welded import POLE_RTOL, natural_frequencies
+def _check_frictional(iface: str, *keys) -> None:
+    """A frictional interface needs f > 0 and F0 > 0 (each ``(section, key, value)``):
+    otherwise its slip torque f N a is 0 and the rods are not coupled."""
+    for sec, key, value in keys:
+        if value <= 0.0 and iface != "welded":
+            raise sec.error(key, f"must be > 0 for a frictional interface (interface = "
+                            f"{iface!r}), got {value:g}")
 
-    n = int(W / w1 * 1.05) + 2
-    poles = natural_frequencies(rods.with_(interface="welded"), n)
+
+def _refuse_pole(rods: TwoRods, W: float, w1: float, load: Section, key: str) -> None:
+    """An undamped system driven at a pole has no steady state: for a welded interface at
+    any natural frequency, for every other law where a mode carries no interface torque
+    (:func:`~slipcycle.rods.welded.torque_free_frequencies`)."""
+    from slipcycle.rods.welded import POLE_RTOL, natural_frequencies, torque_free_frequencies
+
+    if rods.interface == "welded":
+        poles = natural_frequencies(rods.with_(interface="welded"), int(W / w1 * 1.05) + 2)
+        what = "a natural frequency of the welded, undamped system"
+    else:
+        poles = torque_free_frequencies(rods, W * (1.0 + 2 * POLE_RTOL))
+        what = ("a natural frequency of both rods with the interface end free: the "
+                "undamped mode carries no interface torque, so friction cannot bound it")
     hit = np.abs(W / poles - 1.0) <= POLE_RTOL
     if np.any(hit):
         r = float(poles[hit][0] / w1)
-        raise load.error(key, f"Ω/ω1 = {W / w1:.9g} is a natural frequency of the welded, "
-                         f"undamped system (pole at Ω/ω1 = {r:.9g}): no steady state exists; "
-                         "give rods.damping_ratio > 0 or another frequency")
+        raise load.error(key, f"Ω/ω1 = {W / w1:.9g} is {what} (pole at Ω/ω1 = {r:.9g}): "
+                         "no steady state exists; give rods.damping_ratio > 0 or another "
+                         "frequency")
 
 
 def interface_bed(rc: RodsCase):
@@ -375,6 +392,18 @@ def _none_if_inf(x: float):
     return None if not math.isfinite(x) else float(x)
 
 
+def _energy_balance_error(dyn, amplitude: float) -> float:
+    """(W_in − D − D_damp)/|W_in| over the steady cycle [1]; 0 when all three energies are
+    within round-off of zero (a stuck, undamped cycle: 0/0, nothing to balance).
+
+    Round-off of a cycle's work is relative to T_max Θa (J), the work scale of the cycle.
+    """
+    terms = (abs(dyn.input_work), abs(dyn.dissipation), abs(dyn.damping_loss))
+    if max(terms) <= 1e-9 * dyn.T_max * amplitude:
+        return 0.0
+    return (dyn.input_work - dyn.dissipation - dyn.damping_loss) / max(terms[0], 1e-300)
+
+
 @dataclass(frozen=True, kw_only=True, repr=False, eq=False)
 class RodsResult(RunResult):
     """Result of a two-rod run: the shared vocabulary of :class:`~slipcycle.result.RunResult`
@@ -422,6 +451,12 @@ class RodsResult(RunResult):
         else:
             msg = (f"no periodic steady state within {dyn.cycles} cycles (residual "
                    f"{dyn.residual:.3g})")
+            if rc.rods.damping_ratio == 0.0 and dyn.slipped:
+                # nothing but slip removes energy: the free vibration that slip leaves in
+                # the rods need not settle into a cycle (docs/rods.md, undamped resonance)
+                msg += ("; undamped (rods.damping_ratio = 0): the vibration left by slip "
+                        "does not decay, give rods.damping_ratio > 0")
+                log.warning("rods: %s", msg)
         return cls(steady_state=state, steady_state_detail=detail,
                    dissipation_per_cycle=float(dyn.dissipation), cycles_run=int(dyn.cycles),
                    residual=float(dyn.residual), converged=bool(dyn.converged), message=msg,
@@ -449,14 +484,14 @@ class RodsResult(RunResult):
             "rotation_amplitude": exc.rotation_amplitude,
             "T_dyn_max": dyn.T_max,
             "T_qs_max": qs.T_max,
-            "torque_ratio": dyn.T_max / qs.T_max,
+            # None where both torques underflow to 0 (a subnormal amplitude): 0/0
+            "torque_ratio": dyn.T_max / qs.T_max if qs.T_max > 0 else None,
             "dissipation_per_cycle": dyn.dissipation,
             "dissipation_per_cycle_qs": qs.dissipation,
             "dissipation_ratio": (dyn.dissipation / qs.dissipation if qs.dissipation > 0 else None),
             "damping_loss_per_cycle": dyn.damping_loss,
             "input_work_per_cycle": dyn.input_work,
-            "energy_balance_error": ((dyn.input_work - dyn.dissipation - dyn.damping_loss)
-                                     / max(abs(dyn.input_work), 1e-300)),
+            "energy_balance_error": _energy_balance_error(dyn, exc.rotation_amplitude),
             "slip_inception_amplitude_dyn": _none_if_inf(res["inception_dyn"]),
             "slip_inception_amplitude_qs": _none_if_inf(res["inception_qs"]),
             "slip_inception_torque": _none_if_inf(res["bed"].first_slip_torque(N0)),

@@ -44,7 +44,12 @@ from slipcycle.rods.interfaces import Bed, Welded, gross_slip_torque, interface_
 from slipcycle.rods.modal import ModalBasis, Propagator, modal_basis, steady_state
 from slipcycle.rods.model import Excitation, TwoRods
 from slipcycle.rods.quasistatic import quasi_static_loop
-from slipcycle.rods.welded import POLE_RTOL, natural_frequencies, omega1
+from slipcycle.rods.welded import (
+    POLE_RTOL,
+    natural_frequencies,
+    omega1,
+    torque_free_frequencies,
+)
 
 __all__ = ["Study", "Point", "limit_frequency", "regime_map", "position_map",
            "gross_slip_amplitude", "make_study", "POLE_RTOL"]
@@ -131,13 +136,19 @@ class Study:
         return self.rods.damping_ratio == 0.0 and not self.bed.is_frictional
 
     def poles(self, max_ratio: float) -> np.ndarray:
-        """Pole frequency ratios Ω/ω1 ≤ max_ratio (empty unless welded and undamped)."""
-        if not self.undamped_welded:
+        """Pole frequency ratios Ω/ω1 ≤ max_ratio: empty when damped; every natural
+        frequency when welded; with a frictional interface the frequencies of the modes
+        that carry no interface torque (:func:`torque_free_frequencies`)."""
+        if self.rods.damping_ratio != 0.0:
             return np.zeros(0)
         key = ("poles", max_ratio)
         if key not in self._qs:
-            n = int(max_ratio * 1.05) + 2
-            w = natural_frequencies(self.rods.with_(interface=Welded.name), n) / self.omega1
+            if self.undamped_welded:
+                n = int(max_ratio * 1.05) + 2
+                w = natural_frequencies(self.rods.with_(interface=Welded.name), n)
+            else:
+                w = torque_free_frequencies(self.rods, max_ratio * self.omega1)
+            w = w / self.omega1
             self._qs[key] = w[w <= max_ratio * (1 + POLE_RTOL)]
         return self._qs[key]
 

@@ -181,6 +181,12 @@ def modal_frf(basis: ModalBasis, Omega: float, k_int: float = math.inf) -> compl
     H_Θ = 1 + Ω² Σ b g/D_k − r_Θ Ω², D_k = ω_k² − Ω² + 2iζω_kΩ.
     """
     D = basis.omega**2 - Omega**2 + 2j * basis.zeta * basis.omega * Omega
+    on = D == 0.0
+    if np.any(on):
+        # Ω on an undamped modal frequency (of a rod with its interface end free): the 1/D
+        # terms dominate H_T and H_Θ alike and T̂ tends to the ratio of their residues
+        b, g = basis.b[on], basis.g[on]
+        return complex(Omega**2 * np.sum(b * g) / np.sum(b**2))
     HT = np.sum(basis.b**2 / D) + basis.R
     HTh = 1.0 + Omega**2 * np.sum(basis.b * basis.g / D) - basis.r_theta * Omega**2
     if not math.isfinite(k_int):
@@ -301,10 +307,12 @@ def linear_steady_state(basis: ModalBasis, exc: Excitation, k_int: float):
     th = -1j * exc.rotation_amplitude  # Θ = Θa sin Ωt = Re(−iΘa e^{iΩt})
     That = modal_frf(basis, W, k_int) * th
     D = basis.omega**2 - W**2 + 2j * basis.zeta * basis.omega * W
-    qhat = (-basis.b * That + basis.g * W**2 * th) / D
-    HT = np.sum(basis.b**2 / D) + basis.R
-    HTh = 1.0 + W**2 * np.sum(basis.b * basis.g / D) - basis.r_theta * W**2
-    dhat = th * HTh - That * HT
+    # Ω on an undamped modal frequency gives inf/NaN here: the caller then starts from rest
+    with np.errstate(divide="ignore", invalid="ignore"):
+        qhat = (-basis.b * That + basis.g * W**2 * th) / D
+        HT = np.sum(basis.b**2 / D) + basis.R
+        HTh = 1.0 + W**2 * np.sum(basis.b * basis.g / D) - basis.r_theta * W**2
+        dhat = th * HTh - That * HT
     return np.real(qhat), np.real(1j * W * qhat), float(np.real(dhat)), float(np.real(That))
 
 

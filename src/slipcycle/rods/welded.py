@@ -150,6 +150,39 @@ def natural_frequencies(rods: TwoRods, count: int = 1, k_int: float = math.inf) 
     return np.array(roots[:count])
 
 
+def torque_free_frequencies(rods: TwoRods, max_omega: float) -> np.ndarray:
+    """Frequencies ≤ ``max_omega`` of the modes that carry no torque through the interface.
+
+    Rod 1 (clamped at −L1) and rod 2 (held by the drive at L2), each with its interface end
+    free, vibrate at (j − 1/2) π c/L. Where a frequency of rod 1 equals one of rod 2 (to
+    :data:`POLE_RTOL`), the two mode shapes scaled to the same interface rotation form a
+    mode of the assembly with no relative rotation and no torque at the interface: no
+    interface law — welded, elastic or frictional — does work on it. Undamped, the drive
+    excites it without bound at that frequency: a pole of every interface law.
+
+    Parameters
+    ----------
+    rods : TwoRods
+        Lengths L_j (m) and torsional wave speeds c_j (m/s) of both rods.
+    max_omega : float
+        Upper end of the search (rad/s).
+
+    Returns
+    -------
+    ndarray
+        The frequencies in ascending order (rad/s); usually empty (equal travel times
+        L1/c1 and L2/c2, or ratios of odd integers, make them exist).
+    """
+    def free_end(rod):
+        step = math.pi * rod.c_torsion / rod.length
+        n = int(max_omega * (1.0 + 2 * POLE_RTOL) / step + 0.5) + 1
+        return (np.arange(1, n + 1) - 0.5) * step
+
+    w1, w2 = free_end(rods.rods[0]), free_end(rods.rods[1])
+    hit = np.any(np.abs(w1[:, None] / w2[None, :] - 1.0) <= POLE_RTOL, axis=1)
+    return w1[hit & (w1 <= max_omega * (1.0 + POLE_RTOL))]
+
+
 def omega1(rods: TwoRods) -> float:
     """ω1: lowest torsional natural frequency of the welded system, outer ends fixed (rad/s).
 

@@ -43,9 +43,24 @@ class LimitsCase:
 
 
 def _axis(sec, key, default, **bounds):
-    """A grid axis; values given as a list are sorted."""
-    vals = sec.grid(key, default, max_num=10000, **bounds)
-    return vals if isinstance(sec.data.get(key, default), dict) else np.sort(vals)
+    """A grid axis, sorted increasing whatever the order given (a list, or a table whose
+    ``start`` exceeds its ``stop``), so that the first crossing of the tolerance is always
+    searched from the low end of the range.
+
+    Raises
+    ------
+    CaseError
+        Naming the key, for an empty list or a value given twice (a repeated point would be
+        computed twice and makes the bisection between neighbours void).
+    """
+    vals = np.sort(sec.grid(key, default, max_num=10000, **bounds))
+    if vals.size == 0:
+        raise sec.error(key, "must hold at least one value, got an empty list")
+    same = np.flatnonzero(np.diff(vals) <= 0.0)
+    if same.size:
+        raise sec.error(key, f"holds the value {vals[same[0]]:g} more than once; "
+                        "give distinct values")
+    return vals
 
 
 def parse_limits(case, tolerance: float, maps: bool = True) -> LimitsCase:
