@@ -121,7 +121,7 @@ STEADY_STATES: tuple[str, ...] = tuple(s.value for s in SteadyState)
 #: the sentence a run result's ``message`` starts with, per class
 STEADY_MESSAGES: dict[str, str] = {
     "shakedown": "shakedown: no node slips in the steady cycle",
-    "cyclic_slip": "cyclic slip: some nodes slip every cycle, the others stay stuck",
+    "cyclic_slip": "cyclic slip: nodes slip every cycle (any others stay stuck)",
     "ratcheting": "ratcheting: slip accumulates by the same amount every cycle",
     "gross_slip": "gross slip: the contact cannot carry the tangential load",
     "not_converged": "no steady cycle within the cycles allowed",
