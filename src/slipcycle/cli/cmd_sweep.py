@@ -14,14 +14,19 @@ integer codes with CF ``flag_values``/``flag_meanings``, and every entry carries
 ``units`` the model gives in its summary.
 
 One sweep at a time may use a store: a second one on the same ``--out`` stops at once.
+Ctrl-C stops a sweep at once (exit code 130) with every finished run stored, and says how
+to complete it (``--resume``). A run that stops with an input or solver error is stored as
+failed (its message in the ``error`` output) and the sweep goes on; the summary counts the
+failed runs and gives the first message.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
-from slipcycle.cli.common import add_common, finish_study, study_options
+from slipcycle.cli.common import add_common, finish_study, log, study_options
 
 
 def add_parser(sub) -> None:
@@ -40,10 +45,29 @@ def execute(args: argparse.Namespace) -> int:
     from slipcycle.io import read_case, write_outputs
     from slipcycle.registry import RUN_MODELS
     from slipcycle.studies.case_sweep import run_case_sweep
+    from slipcycle.sweep.core import SweepInterrupted
 
     case = read_case(args.case, models=list(RUN_MODELS))
-    status = run_case_sweep(
-        case, args.sets, args.out, **study_options(args),
-        write=lambda out: write_outputs(args.out, out, case.text, case.path))
-    return finish_study(status, args, case, ("runs", "axes", "dissipation_per_cycle"),
+    try:
+        status = run_case_sweep(
+            case, args.sets, args.out, **study_options(args),
+            write=lambda out: write_outputs(args.out, out, case.text, case.path))
+    except SweepInterrupted as exc:
+        print(interrupted_line(exc, args), file=sys.stderr)
+        return 130
+    if status.complete and status.outputs.summary.get("failed_runs"):
+        s = status.outputs.summary
+        log.warning("%d of %d runs failed (stored as failed, message in the 'error' "
+                    "output); first: %s", s["failed_runs"], s["runs"], s["first_failure"])
+    return finish_study(status, args, case, ("runs", "failed_runs", "first_failure", "axes",
+                                             "dissipation_per_cycle"),
                         what="sweep stopped", unit="runs", write=False)
+
+
+def interrupted_line(exc, args: argparse.Namespace) -> str:
+    """The one line of a sweep stopped by Ctrl-C: how far it got, how to go on."""
+    if not exc.done:
+        return (f"interrupted: sweep stopped before any of its {exc.total} runs finished "
+                "(nothing stored); run it again to start it")
+    return (f"interrupted: sweep stopped with {exc.done} of {exc.total} runs stored in "
+            f"{exc.path}; complete it with the same command and --resume")

@@ -12,6 +12,12 @@ one the model gives no words for is stored as text (never as a code that could b
 wrong); every entry carries the ``units`` of the summary's ``units`` map, and none where
 the model gives none. Wall times are left out so that a sweep is reproducible bit for
 bit.
+
+A cell whose run stops with a user-facing error (:class:`~slipcycle.errors.InputError`,
+:class:`~slipcycle.errors.SolverError`: a friction of zero, an amplitude too small to
+solve) does not stop the sweep: it is stored as failed (``steady_state_class`` = the code
+of ``failed``, its message in the text output ``error``, other outputs NaN) and the
+summary counts the failed runs. A bug still stops the sweep, finished cells kept.
 """
 
 from __future__ import annotations
@@ -26,8 +32,10 @@ import numpy as np
 
 from slipcycle import registry
 from slipcycle.api import apply_overrides, run
+from slipcycle.errors import InputError, SolverError
 from slipcycle.io import Case, CaseError, RunOutputs
 from slipcycle.io.case import parse_case_text
+from slipcycle.result import STEADY_STATES
 from slipcycle.sweep.core import (
     Axis,
     CellOutputs,
@@ -42,9 +50,14 @@ from slipcycle.sweep.core import (
 from slipcycle.sweep.dataset import StudyStatus, as_case_error, store_dataset
 
 __all__ = ["apply_overrides", "case_task", "parse_set", "validate_cells", "make_task",
-           "summary_numbers", "sweep_outputs", "run_case_sweep", "StudyStatus"]
+           "summary_numbers", "sweep_outputs", "run_case_sweep", "StudyStatus",
+           "failed_cell"]
 
 _KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(\[(\d+)\])?$")
+
+#: the stored output of a failed run's class, and of its message
+CLASS, ERROR = "steady_state_class", "error"
+
 
 def parse_set(items: list[str]) -> list[Axis]:
     """``["loading.lam=1:2:41", …]`` → axes. Raises :class:`SweepError` naming the option."""
@@ -61,7 +74,15 @@ def parse_set(items: list[str]) -> list[Axis]:
         if key in seen:
             raise SweepError(f"--set {key}", "given twice")
         seen.add(key)
-        axes.append(Axis(key, tuple(parse_values(spec, key))))
+        values = parse_values(spec, key)
+        distinct: set = set()
+        # hashing, not pairwise comparison: an axis may have 10^6 values (1 == 1.0)
+        twice = sorted({repr(v) for v in values if v in distinct or distinct.add(v)})
+        if twice:
+            # two cells with one coordinate: the store could not tell them apart
+            raise SweepError(f"--set {key}", f"value {', '.join(twice)} given more than "
+                             "once; each value of a sweep axis must be distinct")
+        axes.append(Axis(key, tuple(values)))
     if not axes:
         raise SweepError("--set", "give at least one --set key=start:stop:num")
     check_size([a.size for a in axes], "--set")
@@ -180,11 +201,24 @@ def summary_numbers(summary: dict, flags: Mapping[str, tuple] | None = None
     return CellOutputs(out, attrs)
 
 
+def failed_cell(exc: BaseException) -> CellOutputs:
+    """The outputs of a cell whose run stopped with ``exc``: the ``failed`` class code and
+    the error's one-line message (every other output is NaN in the store)."""
+    message = " ".join(str(exc).split()) or type(exc).__name__
+    return CellOutputs({CLASS: np.int64(STEADY_STATES.index("failed")), ERROR: message},
+                       {CLASS: {"flag_values": list(range(len(STEADY_STATES))),
+                                "flag_meanings": " ".join(STEADY_STATES)}})
+
+
 def case_task(params: dict, case_text: str, case_path) -> dict:
-    """Run the case with ``params`` applied; return :func:`summary_numbers` of its summary.
+    """Run the case with ``params`` applied; return :func:`summary_numbers` of its summary,
+    or :func:`failed_cell` if the run stops with an input or solver error.
 
     Module-level so that process pools and Dask workers can unpickle it."""
-    result = run(_case_with(case_text, case_path, params))
+    try:
+        result = run(_case_with(case_text, case_path, params))
+    except (InputError, SolverError) as exc:
+        return failed_cell(exc)
     return summary_numbers(result.summary(), result.flags)
 
 
@@ -201,16 +235,25 @@ def sweep_outputs(case: Case, store: SweepStore, axes: list[Axis], store_path) -
     -------
     RunOutputs
         ``summary``: ``model``, ``analysis`` ("sweep"), ``axes`` (name -> values),
-        ``runs``, ``store``, ``outputs`` (names), ``flags`` and ``units`` of the stored
+        ``runs``, ``failed_runs`` (runs stopped by an input or solver error) and
+        ``first_failure`` (the message of the first in grid order, with its values, or
+        None), ``store``, ``outputs`` (names), ``flags`` and ``units`` of the stored
         outputs, ``dissipation_per_cycle`` ({min, max} over the cells [J], or None);
         ``dataset``: :func:`~slipcycle.sweep.dataset.store_dataset`.
     """
     ds = store_dataset(store, axes)
     data = store.read()
     described = store.output_attrs
+    errors = data.get(ERROR, np.full(store.shape, ""))
+    failed = [idx for idx in np.ndindex(*store.shape) if errors[idx]]
+    first = None
+    if failed:
+        first = f"{errors[failed[0]]} (with " + ", ".join(
+            f"{a.name} = {a.values[i]}" for a, i in zip(axes, failed[0], strict=True)) + ")"
     summary = {"model": case.model, "analysis": "sweep",
                "axes": {a.name: list(a.values) for a in axes},
-               "runs": int(store.done().size), "store": str(store_path),
+               "runs": int(store.done().size), "failed_runs": len(failed),
+               "first_failure": first, "store": str(store_path),
                "outputs": sorted(data),
                "flags": {k: v["flag_meanings"].split() for k, v in described.items()
                          if "flag_meanings" in v},

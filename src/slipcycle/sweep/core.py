@@ -5,7 +5,11 @@ function ``fn(params) -> dict`` (``params`` maps axis names to the cell's values
 returns numbers or fixed-shape numeric arrays. Results go into a Zarr group:
 
 - one array per output, shape ``grid_shape + cell_shape``, chunked one cell per chunk, so
-  every finished run is written on its own as soon as it returns;
+  every finished run is written on its own as soon as it returns; the outputs are those
+  of every cell together (a cell without an output holds its fill value: NaN, -1, False
+  or ""), and a per-cell vector is as long as the longest one, shorter ones padded with
+  the fill value (a sweep over a mesh size: ``dissipation_per_node`` of 9 and 13 nodes is
+  stored over 13 nodes), so the store does not depend on the order cells finish in;
 - a ``done`` boolean array (one chunk per cell), set *after* the cell's outputs are
   written, so a cell is either complete or absent;
 - attributes: the axes, the output schema and a fingerprint of the sweep (the task's
@@ -18,8 +22,11 @@ returns numbers or fixed-shape numeric arrays. Results go into a Zarr group:
 - an existing Dask cluster (``scheduler="tcp://host:port"`` or a ``distributed.Client``),
 
 with a tqdm progress bar (ETA). Only the calling process writes to the store. If a task
-raises, the cells already finished stay stored and the error propagates; ``resume=True``
-later computes only what is missing, giving results identical to an uninterrupted sweep.
+raises, the cells already finished (those still running included) stay stored and the
+error propagates; ``resume=True`` later computes only what is missing, giving results
+identical to an uninterrupted sweep. Ctrl-C (SIGINT) stops a sweep on local workers at
+once: the workers ignore it and are ended by the sweep, every cell that finished is
+stored, and :class:`SweepInterrupted` (a ``KeyboardInterrupt``) says how many.
 
 Trust: a sweep holds an exclusive lock on its store (:class:`lock_store`; a second sweep
 on it stops at once); a store is marked created only once all its arrays exist, and
@@ -48,14 +55,17 @@ import gc
 import hashlib
 import itertools
 import json
+import logging
 import math
 import os
 import re
 import shutil
+import signal
 import sys
 import threading
 from collections.abc import Callable, Mapping
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -68,7 +78,7 @@ from slipcycle.io.sizes import format_bytes
 __all__ = ["Axis", "SweepStore", "run_sweep", "SweepError", "fingerprint", "TaskRunner",
            "run_group", "worker_threads", "CellOutputs", "lock_store", "check_size",
            "connect_scheduler", "MAX_CELLS", "SCHEDULER_TIMEOUT_S", "pool_context",
-           "WORKER_PRELOAD"]
+           "WORKER_PRELOAD", "SweepInterrupted"]
 
 #: most cells one sweep may have: a store keeps one Zarr chunk file per cell and output,
 #: and the sweep keeps a few hundred bytes of bookkeeping per cell in memory
@@ -90,6 +100,22 @@ _ZARR_PARTIAL = re.compile(r"\.[0-9a-f]{32}\.partial$")
 
 class SweepError(InputError):
     """An invalid sweep request (``key`` names the offending option or key)."""
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a sweep; every cell that finished is stored.
+
+    Attributes
+    ----------
+    path : Path
+        The store (absent when no cell had finished: nothing to resume).
+    done, total : int
+        Cells stored, and cells of the grid.
+    """
+
+    def __init__(self, path, done: int, total: int):
+        super().__init__(f"sweep interrupted with {done} of {total} cells done")
+        self.path, self.done, self.total = Path(path), int(done), int(total)
 
 
 @dataclass(frozen=True)
@@ -233,19 +259,11 @@ class SweepStore:
         # mode "a", not "w": "w" would delete the lock file held in the directory
         g = self._zarr.open_group(str(self.path), mode="a",
                                   attributes={"slipcycle_sweep": "creating"})
-        nd = len(self.shape)
+        self.group = g
         oattrs = _jsonable_attrs(output_attrs or {})
         for name, (cshape, dtype) in schema.items():
-            cshape = tuple(cshape)
-            if _is_text(dtype):
-                dt, fill = str, ""
-            else:
-                dt = np.dtype(dtype)
-                fill = np.nan if dt.kind == "f" else (False if dt.kind == "b" else -1)
-            self._create(g, name, self.shape + cshape, (1,) * nd + (cshape or ()), dt, fill)
-            if oattrs.get(name):
-                g[name].attrs.update(oattrs[name])
-        self._create(g, "done", self.shape, (1,) * nd, np.dtype(bool), False)
+            self._add(name, cshape, dtype, oattrs.get(name))
+        self._create(g, "done", self.shape, (1,) * len(self.shape), np.dtype(bool), False)
         for a in self.axes:
             vals = np.asarray(a.values)
             if vals.dtype.kind in "fiub":
@@ -254,14 +272,13 @@ class SweepStore:
         # the fingerprint last: its presence marks a completely created store
         g.attrs.update({
             "axes": [[a.name, [_to_jsonable(v) for v in a.values]] for a in self.axes],
-            "schema": {k: [list(v[0]), _TEXT if _is_text(v[1]) else np.dtype(v[1]).str]
-                       for k, v in schema.items()},
+            "schema": _schema_attr(schema),
             "output_attrs": oattrs,
             **(dict(attrs) if attrs else {}),
             "slipcycle_sweep": "created",
             "fingerprint": self.fp,
         })
-        self.group = g
+        self._schema = None
 
     @staticmethod
     def _create(g, name, shape, chunks, dtype, fill):
@@ -275,8 +292,13 @@ class SweepStore:
     # -- cells ------------------------------------------------------------------------------
     @property
     def schema(self) -> dict:
+        """Output name -> (cell shape, dtype). The cell shape is read from the array
+        itself: a kill between growing an array and updating the ``schema`` attribute
+        leaves the array right."""
         if self._schema is None:
-            self._schema = {k: (tuple(v[0]), _TEXT if v[1] == _TEXT else np.dtype(v[1]))
+            nd = len(self.shape)
+            self._schema = {k: (tuple(self.group[k].shape[nd:]),
+                                _TEXT if v[1] == _TEXT else np.dtype(v[1]))
                             for k, v in self.group.attrs["schema"].items()}
         return self._schema
 
@@ -291,20 +313,64 @@ class SweepStore:
         given = getattr(result, "attrs", None)
         if not given:
             return
-        if not hasattr(self, "_attrs_cache"):
-            self._attrs_cache = self.output_attrs
-        new = _jsonable_attrs(given)
-        for name, at in new.items():
-            if name in self.schema and self._attrs_cache.get(name, {}) != at:
+        have = self.output_attrs
+        for name, at in _jsonable_attrs(given).items():
+            if name in self.schema and name in result and have.get(name, {}) != at:
                 raise ValueError(f"sweep output {name!r}: attributes {at} differ from the "
-                                 f"store's {self._attrs_cache.get(name, {})}")
+                                 f"store's {have.get(name, {})}")
+
+    def fit(self, result: Mapping) -> None:
+        """Make room for one cell's ``result``: an array for each output the store lacks
+        (the cells before hold its fill value) and longer per-cell vectors where the
+        result's are longer than any before (shorter ones are padded when written)."""
+        self.check_attrs(result)
+        schema, grown = self.schema, {}
+        for name, (cshape, dtype) in _schema_of(result).items():
+            if name not in schema:
+                grown[name] = (cshape, dtype)
+                continue
+            have, kind = schema[name]
+            if _is_text(dtype) != _is_text(kind) or len(cshape) != len(have):
+                raise ValueError(f"sweep output {name!r}: {_describe(cshape, dtype)} in one "
+                                 f"cell, {_describe(have, kind)} in another")
+            big = tuple(max(a, b) for a, b in zip(cshape, have, strict=True))
+            if big != have:
+                self.group[name].resize(self.shape + big)
+                grown[name] = (big, kind)
+        if not grown:
+            return
+        given = _jsonable_attrs(getattr(result, "attrs", None) or {})
+        oattrs = self.output_attrs
+        for name, (cshape, dtype) in grown.items():
+            if name not in schema:
+                self._add(name, cshape, dtype, given.get(name))
+                if given.get(name):
+                    oattrs[name] = given[name]
+        # the attributes after the arrays: a kill in between leaves arrays that the next
+        # cell with these outputs creates again
+        self.group.attrs.update({"schema": {**self.group.attrs["schema"],
+                                            **_schema_attr(grown)},
+                                 "output_attrs": oattrs})
+        self._schema = None
+
+    def _add(self, name, cshape, dtype, attrs) -> None:
+        cshape = tuple(cshape)
+        if _is_text(dtype):
+            dt, fill = str, ""
+        else:
+            dt = np.dtype(dtype)
+            fill = np.nan if dt.kind == "f" else (False if dt.kind == "b" else -1)
+        self._create(self.group, name, self.shape + cshape,
+                     (1,) * len(self.shape) + (cshape or ()), dt, fill)
+        if attrs:
+            self.group[name].attrs.update(attrs)
 
     def done(self) -> np.ndarray:
         return np.asarray(self.group["done"][...], bool)
 
     def write(self, index: tuple, result: Mapping) -> None:
         """Write one cell's outputs, then mark it done."""
-        self.check_attrs(result)
+        self.fit(result)
         for name, (cshape, dtype) in self.schema.items():
             if name not in result:
                 continue
@@ -321,7 +387,7 @@ class SweepStore:
             self.write(indices[0], results[0])
             return
         for r in results:
-            self.check_attrs(r)
+            self.fit(r)
         idx = np.array(indices)
         lo, hi = idx.min(axis=0), idx.max(axis=0)
         box = tuple(int(h - l + 1) for l, h in zip(lo, hi, strict=True))
@@ -363,21 +429,51 @@ def _is_text(dtype) -> bool:
     return isinstance(dtype, str) and dtype == _TEXT
 
 
+def _describe(cshape, dtype) -> str:
+    return f"{'text' if _is_text(dtype) else 'numbers'} of shape {tuple(cshape)}"
+
+
+def _schema_attr(schema: Mapping) -> dict:
+    """``schema`` as the store's ``schema`` attribute (JSON)."""
+    return {k: [list(v[0]), _TEXT if _is_text(v[1]) else np.dtype(v[1]).str]
+            for k, v in schema.items()}
+
+
+def _fill(dtype):
+    if _is_text(dtype):
+        return ""
+    kind = np.dtype(dtype).kind
+    return np.nan if kind == "f" else (False if kind == "b" else -1)
+
+
 def _checked(name, index, value, cshape, dtype) -> np.ndarray:
-    """One cell's output ``name`` as ``dtype``, refused if its shape is not ``cshape``."""
+    """One cell's output ``name`` as ``dtype`` and shape ``cshape``: a shorter vector is
+    padded with the fill value (NaN for numbers); anything else is refused."""
     val = np.asarray(value)
-    if val.shape != cshape:
+    if val.ndim != len(cshape) or any(a > b for a, b in zip(val.shape, cshape, strict=True)):
         raise ValueError(f"output {name!r} of cell {index}: shape {val.shape}, "
                          f"expected {cshape}")
     if _is_text(dtype):
         if val.dtype.kind not in "UT":
             raise ValueError(f"output {name!r} of cell {index}: expected text, got "
                              f"{val.dtype}")
-        return val.astype(str)
-    if val.dtype.kind not in "biuf":
+        val = val.astype(str)
+    elif val.dtype.kind not in "biuf":
         raise ValueError(f"output {name!r} of cell {index}: expected a number, got "
                          f"{val.dtype}")
-    return val.astype(dtype)
+    elif np.dtype(dtype).kind in "iub" and val.dtype.kind == "f" and \
+            not np.all(np.isfinite(val) & (val == np.round(val))):
+        # an integer output (a class code, a count) given as a fraction in this cell:
+        # casting would cut it silently
+        raise ValueError(f"output {name!r} of cell {index}: {val.tolist()} is not a whole "
+                         "number, as the output is in other cells")
+    else:
+        val = val.astype(dtype)
+    if val.shape == tuple(cshape):
+        return val
+    out = np.full(cshape, _fill(dtype), object if _is_text(dtype) else dtype)
+    out[tuple(slice(0, n) for n in val.shape)] = val
+    return out.astype(str) if _is_text(dtype) else out
 
 
 def _cells(shape):
@@ -446,18 +542,34 @@ def worker_threads(workers: int) -> int:
     return max(1, usable_cores() // max(1, workers))
 
 
-def _worker_init(threads: int, parent: int | None = None) -> None:
+def _worker_init(threads: int, parent: int | None = None, logs: tuple | None = None
+                 ) -> None:
     """Initializer of local worker processes.
 
     Caps Numba's threads so that ``workers`` processes × threads do not oversubscribe the
     cores (``prange`` kernels), and ties the worker's life to the sweep's process
     ``parent``: a worker blocked on the task queue would otherwise outlive a killed
-    parent for ever (:func:`_die_with_parent`).
+    parent for ever (:func:`_die_with_parent`). Ctrl-C is the sweep's to handle: a worker
+    ignores SIGINT (the terminal sends it to the whole process group; a worker stopped
+    halfway through a queue operation could leave its pool waiting for ever) and is ended
+    by the sweep (:func:`_end_workers`). ``logs``: the sweep's logging (:func:`_log_setup`),
+    which the worker follows (``--quiet``, ``--verbose``).
     """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     if parent is not None:
         _die_with_parent(parent)
+    if logs is not None:
+        _follow_logs(*logs)
     import numba
+    from numba.np.ufunc import parallel
 
+    # Numba guards the launch of its threads with a lock shared by the processes forked
+    # from the launching one (it takes the fork server's "forkserver" for "fork"): a
+    # named semaphore, which a worker ended by the sweep (:func:`_end_workers`) cannot
+    # release, and which the resource tracker then reports as leaked on the terminal.
+    # No process is forked from a worker, so a lock of this process protects the same.
+    if getattr(parallel, "_backend_init_process_lock", False) is None:
+        parallel._backend_init_process_lock = threading.RLock()
     numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
     _limit_blas_threads(threads)
 
@@ -518,17 +630,37 @@ def _die_with_parent(parent: int, poll_s: float = 0.5) -> None:
     threading.Thread(target=watch, name="slipcycle-parent-watch", daemon=True).start()
 
 
-class _Writer:
-    """Writes finished tasks into the store; creates a new store from the first cell's
-    result (grid order, so the schema does not depend on which task finishes first) and
-    buffers earlier-finishing tasks until then."""
+_LOGGER = "slipcycle"
 
-    def __init__(self, store: SweepStore, first: tuple | None, create, bar):
+
+def _log_setup() -> tuple[int, str | None]:
+    """The level of this process's ``slipcycle`` logger and the format of its handler,
+    for the workers to follow (forked from a fork server, they inherit neither)."""
+    log = logging.getLogger(_LOGGER)
+    fmt = next((h.formatter._fmt for h in log.handlers if h.formatter is not None), None)
+    return log.getEffectiveLevel(), fmt
+
+
+def _follow_logs(level: int, fmt: str | None) -> None:
+    """Give this worker's ``slipcycle`` logger the sweep's level and format (stderr)."""
+    log = logging.getLogger(_LOGGER)
+    log.setLevel(level)
+    if fmt is not None and not log.handlers:
+        handler = logging.StreamHandler()
+        handler.setFormatter(logging.Formatter(fmt))
+        log.addHandler(handler)
+        log.propagate = False
+
+
+class _Writer:
+    """Writes finished tasks into the store as they arrive; a new store is created from
+    the first result that arrives and grows as later ones need (:meth:`SweepStore.fit`),
+    so nothing finished waits in memory, and the store does not depend on the order."""
+
+    def __init__(self, store: SweepStore, create, bar):
         self.store = store
-        self.first = first
         self.create = create
         self.bar = bar
-        self.buffer: list[tuple[list, list]] = []
 
     @property
     def ready(self) -> bool:
@@ -536,17 +668,7 @@ class _Writer:
 
     def put(self, indices: list[tuple], results: list) -> None:
         if not self.ready:
-            if self.first not in indices:
-                self.buffer.append((indices, results))
-                return
-            self.create(results[indices.index(self.first)])
-            self.store.write_many(indices, results)
-            self.bar.update(len(indices))
-            for idx, res in self.buffer:
-                self.store.write_many(idx, res)
-                self.bar.update(len(idx))
-            self.buffer.clear()
-            return
+            self.create(results[0])
         self.store.write_many(indices, results)
         self.bar.update(len(indices))
 
@@ -647,15 +769,15 @@ def _run_locked(fn, axes, store, *, resume, workers, client, progress, stop_afte
         store.remove_partials()         # temporary files of writes a kill interrupted
         done = store.done()
         todo = [c for c in cells if not done[c]]
-        first = None
     elif state == "foreign":
         raise SweepError("--out", f"{store.path} exists and is not a sweep store")
     else:
         # absent, or left by a sweep killed before its store was created: start afresh
         store.clear()
         todo = cells
-        first = cells[0]
-    todo_run = todo if stop_after is None else todo[:max(int(first is not None), stop_after)]
+    # a new store computes one cell at least, so that it exists
+    todo_run = todo if stop_after is None else todo[:max(int(state != "complete"),
+                                                          stop_after)]
     tasks = _groups(todo_run, axes, group_by)
     meta = {**(dict(attrs) if attrs else {}),
             "description": json.loads(json.dumps(description or {}, default=str))}
@@ -665,7 +787,7 @@ def _run_locked(fn, axes, store, *, resume, workers, client, progress, stop_afte
     def create(res0):
         store.create(_schema_of(res0), meta, getattr(res0, "attrs", None))
 
-    writer = _Writer(store, first, create, bar)
+    writer = _Writer(store, create, bar)
     try:
         if not tasks:
             return store
@@ -680,6 +802,13 @@ def _run_locked(fn, axes, store, *, resume, workers, client, progress, stop_afte
         else:
             with _local_pool(min(nproc, len(tasks)), fn) as pool:
                 _run_pool(fn, axes, tasks, min(nproc, len(tasks)), writer, pool)
+    except KeyboardInterrupt:
+        # every finished cell is stored by now: say how many, for the resume message
+        try:
+            done = int(store.done().sum()) if writer.ready else 0
+        except Exception:  # noqa: BLE001 - interrupted while creating the store: no cell
+            done = 0
+        raise SweepInterrupted(store.path, done, len(cells)) from None
     finally:
         bar.close()
     return store
@@ -896,76 +1025,139 @@ def pool_context(fn=None):
 
 def _local_pool(workers: int, fn=None):
     """A process pool (:func:`pool_context`) whose workers share out the cores' Numba
-    threads and die with this process."""
+    threads, die with this process, ignore Ctrl-C and follow this process's logging."""
     return ProcessPoolExecutor(max_workers=workers, mp_context=pool_context(fn),
                                initializer=_worker_init,
-                               initargs=(worker_threads(workers), os.getpid()))
+                               initargs=(worker_threads(workers), os.getpid(), _log_setup()))
+
+
+#: seconds between two looks at the Ctrl-C flag while waiting for workers
+_POLL_S = 0.2
+
+#: seconds a Ctrl-C waits for results on their way back from the workers (finished cells
+#: whose result is still in the pipe) before the workers are ended
+_GRACE_S = 0.25
+
+
+@contextmanager
+def _deferred_interrupt():
+    """Within the block, Ctrl-C (SIGINT) sets the yielded event instead of raising
+    ``KeyboardInterrupt`` wherever the main thread is (halfway through a Zarr write, or
+    inside the pool's bookkeeping); a second Ctrl-C raises at once. Outside the main
+    thread, where no handler can be set, the event is never set."""
+    stop = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def on_sigint(signum, frame):
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+
+    old = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, old if old is not None else signal.default_int_handler)
+
+
+def _end_workers(pool: ProcessPoolExecutor) -> None:
+    """End the pool's worker processes now (their running cells are dropped: ``resume``
+    computes them) and shut the pool down without waiting for its tasks."""
+    # the executor keeps its processes in a private mapping; ending them is the only way
+    # to stop a running task, and a pool shut down while its workers still wait on the
+    # task queue is what left interrupted sweeps hanging at exit
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    for p in procs:
+        try:
+            p.terminate()
+        except (OSError, ValueError):   # pragma: no cover - already gone
+            pass
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        p.join(5.0)
+        if p.is_alive():                # pragma: no cover - ignored SIGTERM
+            p.kill()
+            p.join(1.0)
 
 
 def _run_pool(fn, axes, tasks, workers, writer, pool):
-    max_inflight = 4 * workers
+    """Run ``tasks`` on a local ``pool``, writing each result as it arrives.
+
+    At most ``4 * workers`` tasks are queued at a time. On Ctrl-C the loop stops at once,
+    keeps every task that finished and ends the workers; when a task fails, the tasks
+    still running finish and are kept first; then the exception propagates.
+    """
     it = iter(tasks)
-    pending, task_of = {}, {}
-    first_fut = None
+    pending = {}
 
     def submit(task):
-        nonlocal first_fut
-        fut = pool.submit(run_group, fn, [_params(axes, i) for i in task])
-        pending[fut] = task_of[fut] = task
-        if writer.first in task:
-            first_fut = fut
+        pending[pool.submit(run_group, fn, [_params(axes, i) for i in task])] = task
 
-    try:
-        for task in itertools.islice(it, max_inflight):
-            submit(task)
-        while pending:
-            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-            # keep every success of this batch before a failure in it propagates
-            for fut in sorted(finished, key=lambda f: f.exception() is not None):
-                task = pending.pop(fut)
+    with _deferred_interrupt() as stop:
+        try:
+            for task in itertools.islice(it, 4 * workers):
+                submit(task)
+            while pending:
+                if stop.is_set():
+                    raise KeyboardInterrupt
+                finished, _ = wait(pending, timeout=_POLL_S, return_when=FIRST_COMPLETED)
+                # keep every success of this batch before a failure in it propagates
+                for fut in sorted(finished, key=lambda f: f.exception() is not None):
+                    task = pending.pop(fut)
+                    writer.put(task, fut.result())
+                    nxt = next(it, None)
+                    if nxt is not None:
+                        submit(nxt)
+        except BaseException as exc:
+            interrupted = isinstance(exc, KeyboardInterrupt)
+            try:
+                _keep_finished(pending, writer, None if interrupted else stop)
+            finally:
+                if interrupted or stop.is_set():
+                    _end_workers(pool)
+            raise
+
+
+def _keep_finished(pending: dict, writer, stop: threading.Event | None) -> None:
+    """After a failure or Ctrl-C: cancel the tasks not started, wait for the running
+    ones unless ``stop`` is None (Ctrl-C) or gets set, and write every success."""
+    for fut in pending:
+        fut.cancel()
+    running = [f for f in pending if not f.done()]
+    if stop is None and running:
+        wait(running, timeout=_GRACE_S)
+    while stop is not None and running and not stop.is_set():
+        wait(running, timeout=_POLL_S)
+        running = [f for f in running if not f.done()]
+    for fut, task in pending.items():
+        if fut.done() and not fut.cancelled() and fut.exception() is None:
+            try:
                 writer.put(task, fut.result())
-                nxt = next(it, None)
-                if nxt is not None:
-                    submit(nxt)
-    except BaseException as exc:
-        for fut in pending:
-            if fut is not first_fut:
-                fut.cancel()
-        if not isinstance(exc, KeyboardInterrupt):
-            _salvage(writer, first_fut, task_of)
-        raise
-
-
-def _salvage(writer, first_fut, task_of):
-    """After a failure, before the store exists: wait for the task of the grid's first
-    cell (submitted first, so already running) to create the store and keep the tasks
-    that did finish. Nothing is kept if that task failed too."""
-    if writer.ready or not writer.buffer or first_fut is None:
-        return
-    try:
-        res = first_fut.result()
-    except BaseException:  # noqa: BLE001 - the first cell failed too: nothing to keep
-        return
-    writer.put(task_of[first_fut], res)
+            except Exception:  # noqa: BLE001 - the first error is the one reported
+                pass
 
 
 def _run_dask(fn, axes, tasks, client, writer):
     from distributed import as_completed
 
     futures = {}
-    first_fut = None
     for task in tasks:
         fut = client.submit(run_group, fn, [_params(axes, i) for i in task], pure=False)
         futures[fut] = task
-        if writer.first in task:
-            first_fut = fut
     try:
         for fut in as_completed(list(futures)):
-            writer.put(futures[fut], fut.result())
-    except BaseException as exc:
-        client.cancel([f for f in futures if f is not first_fut])
-        if not isinstance(exc, KeyboardInterrupt):
-            _salvage(writer, first_fut, futures)
+            task = futures.pop(fut)
+            writer.put(task, fut.result())
+    except BaseException:
+        client.cancel([f for f in futures if f.status != "finished"])
+        for fut, task in futures.items():       # finished, not yet written: keep them
+            if fut.status == "finished":
+                try:
+                    writer.put(task, fut.result())
+                except Exception:  # noqa: BLE001 - the first error is the one reported
+                    pass
         raise
 
 
@@ -991,10 +1183,14 @@ class TaskRunner:
         return self
 
     def __exit__(self, *exc):
-        self.close()
+        self.close(interrupted=exc[0] is not None and issubclass(exc[0], KeyboardInterrupt))
 
-    def close(self) -> None:
+    def close(self, interrupted: bool = False) -> None:
+        """Shut the pool down (``interrupted``: end its workers at once, their running
+        tasks dropped) and close an own Dask client."""
         if self._pool is not None:
+            if interrupted:
+                _end_workers(self._pool)
             self._pool.shutdown(cancel_futures=True)
             self._pool = None
         if self._client is not None and self._own_client:
