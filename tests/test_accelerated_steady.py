@@ -383,3 +383,15 @@ def test_3d_anderson_certificate_reports_the_measured_bound_not_its_creep():
     assert np.abs(x - x_p).max() / slip_scale <= cert.memory_distance
     d_p = plain.dissipation_per_cycle
     assert abs(acc.dissipation_per_cycle - d_p) / abs(d_p) <= cert.dissipation_distance
+
+
+def test_a_shakedowns_dissipation_distance_is_measured_against_the_resolved_energy():
+    """The two-node example shakes down with D = 3.8e-10 J left by its last creep; its D
+    distance was reported relative to that D (10.4, a thousand per cent). Relative to the
+    energy the cycling resolves (tol × F × x) it is below the tolerance's order."""
+    import slipcycle
+    from slipcycle.examples import example_path
+
+    s = slipcycle.run(example_path("discrete_two_node.toml")).summary()
+    assert s["steady_state"] == "shakedown"
+    assert 0 <= s["dissipation_distance"] <= 1.0

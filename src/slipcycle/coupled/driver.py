@@ -339,8 +339,8 @@ class Certificate:
         cycle, only bounded by measurements on the benchmark systems.
     dissipation_distance : float
         Estimated distance of D from that limit [1]: the last change of D times max(1,
-        ρ/(1 − ρ)), relative to |D| (to the energy scale F × displacement scale where D
-        is 0); inf with fewer than three cycles run (the first cycle from an assembled
+        ρ/(1 − ρ)), relative to |D|, or to ``tol`` × F × displacement scale (the energy
+        the cycling resolves) where |D| is below that; inf with fewer than three cycles run (the first cycle from an assembled
         or imposed state says nothing about D's convergence). At least the second entry
         of the accelerator's :attr:`Accelerator.distance_bound`, as above.
     """
@@ -362,7 +362,10 @@ def certificate(run: CycleState, accelerator: Accelerator) -> Certificate:
     factor = near / res if res > 0 else 1.0
     d_dist = np.inf
     if len(dis) >= 3:
-        scale = abs(dis[-1]) or run.F * run.xscale
+        # relative to |D|, but not below the energy the cycling resolves (tol × F × x):
+        # a shakedown's D of round-off or creep size would make any distance look huge
+        floor = run.F * run.xscale * max(run.settings.tol, 1e-12)
+        scale = max(abs(dis[-1]), floor) or run.F * run.xscale
         d_dist = abs(dis[-1] - dis[-2]) * factor / scale
     bound = accelerator.distance_bound
     if bound is not None and accelerator.method != "none":
