@@ -340,8 +340,9 @@ class Certificate:
     dissipation_distance : float
         Estimated distance of D from that limit [1]: the last change of D times max(1,
         ρ/(1 − ρ)), relative to |D|, or to ``tol`` × F × displacement scale (the energy
-        the cycling resolves) where |D| is below that; inf with fewer than three cycles run (the first cycle from an assembled
-        or imposed state says nothing about D's convergence). At least the second entry
+        the cycling resolves) where |D| is below that; inf with fewer than three cycles
+        run (the first cycle from an assembled or imposed state says nothing about D's
+        convergence). At least the second entry
         of the accelerator's :attr:`Accelerator.distance_bound`, as above.
     """
 
