@@ -23,7 +23,6 @@ failed runs and gives the first message.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from slipcycle.cli.common import add_common, finish_study, log, study_options
@@ -53,8 +52,8 @@ def execute(args: argparse.Namespace) -> int:
             case, args.sets, args.out, **study_options(args),
             write=lambda out: write_outputs(args.out, out, case.text, case.path))
     except SweepInterrupted as exc:
-        print(interrupted_line(exc, args), file=sys.stderr)
-        return 130
+        # main prints the line (commands write no diagnostics themselves) and exits 130
+        raise KeyboardInterrupt(interrupted_line(exc, args)) from None
     if status.complete and status.outputs.summary.get("failed_runs"):
         s = status.outputs.summary
         log.warning("%d of %d runs failed (stored as failed, message in the 'error' "

@@ -249,8 +249,10 @@ def _main(argv: list[str] | None) -> int:
     except SolverError as exc:
         print(f"error: solver: {_one_line(exc)}", file=sys.stderr)
         return EXIT_SOLVER
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        # a command may say how far it got and how to go on (a sweep: --resume)
+        text = str(exc)
+        print(text if text.startswith("interrupted") else "interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         # the reader of stdout went away (``slipcycle examples | head``): not an error
