@@ -228,8 +228,7 @@ def _on_boundary(mesh: ImportedMesh, faces: list, name: str, key: str) -> list:
         raise CaseError(key, f"surface {name!r} of {mesh.path.name} has no faces")
     outer = mesh.boundary_corners()
     for fs in faces:
-        corners = np.sort(fs.nodes[:, :4 if fs.kind == "quad4" else 3], axis=1)
-        inner = [r for r, c in enumerate(map(tuple, corners)) if c not in outer]
+        inner = [r for r, c in enumerate(map(tuple, fs.corners())) if c not in outer]
         if inner:
             raise CaseError(key, f"surface {name!r}: {fs.name(inner[0], mesh.labels)} is "
                             "inside the body (a face of two elements), not on its surface")

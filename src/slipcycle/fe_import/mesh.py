@@ -77,6 +77,11 @@ class FaceSet:
     owners: np.ndarray | None = None
     side: int = 0
 
+    def corners(self) -> np.ndarray:
+        """(k, 3 or 4) node indices of each face's corners, sorted along each row: the
+        same face of two elements gives the same row."""
+        return np.sort(self.nodes[:, :4 if self.kind == "quad4" else 3], axis=1)
+
     def name(self, row: int, labels: np.ndarray) -> str:
         """``element 12, S2`` (a deck's face) or ``the face of nodes 3, 4, 9`` (node
         ``labels`` of the mesh)."""
@@ -123,7 +128,7 @@ class ImportedMesh:
         """The sorted corner labels of every face on the body's surface (one element's)."""
         out = set()
         for fs in self.boundary_faces():
-            out.update(map(tuple, np.sort(fs.nodes[:, :_face_corners(fs.kind)], axis=1)))
+            out.update(map(tuple, fs.corners()))
         return out
 
     def boundary_faces(self) -> list[FaceSet]:
@@ -151,11 +156,6 @@ class ImportedMesh:
                                    conn[:, list(FACES[kind][f])],
                                    self.points[conn[:, :_corner_count(kind)]].mean(axis=1)))
         return out
-
-
-def _face_corners(kind: str) -> int:
-    """Corner nodes of a face of ``kind`` (the first ones of its node list)."""
-    return 4 if kind == "quad4" else 3
 
 
 def _corner_count(kind: str) -> int:

@@ -23,9 +23,9 @@ from numba import njit
 
 # the Jenkins bed's exact force-controlled step is shared with the rod solvers
 from slipcycle.kernels.jenkins import (
-    _RTOL,
     _newton,
     apply_increment,
+    at_root,
     solve_tangential_force,
 )
 
@@ -175,7 +175,7 @@ def drive_with(t, z, d, slip, level, kn, kt, friction, U_path, T_path, force_con
                 # (no breakpoint between 0 and it): saves the sweep that would confirm it
                 r0 = q0 - target
                 dv = 0.0 - r0 / s0 if s0 > 0.0 else np.nan
-                if abs(r0) <= _RTOL * (qa0 + abs(target)):
+                if at_root(r0, qa0, target):
                     dv = 0.0
                 elif not (below < dv < above):
                     dv, p = _newton(t, ke, cap, target, 0.0, r0, s0, lo, hi, qmax, qa0)

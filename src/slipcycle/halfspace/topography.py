@@ -205,6 +205,17 @@ def _to_map(topo, periodic: bool | None = None, fill_undefined: bool = False,
 #: first bytes of the container formats a height map usually comes in
 _MAGIC = {b"CDF\x01": "netCDF", b"CDF\x02": "netCDF", b"\x89HDF": "netCDF-4/HDF5",
           b"\x93NUMPY": "NumPy .npy"}
+#: first bytes of a netCDF file, classic or netCDF-4 (HDF5)
+_NETCDF_MAGIC = (b"CDF", b"\x89HDF")
+
+
+def _first_bytes(path: str | Path) -> bytes | None:
+    """The first 8 bytes of ``path`` (its format's magic), None if it cannot be read."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(8)
+    except OSError:
+        return None
 
 
 def _unreadable(path: str | Path, exc: Exception) -> str:
@@ -262,20 +273,18 @@ def _check_grid(path: str | Path, key: str) -> None:
     x y z columns only on a grid, so a non-uniform grid would be taken as uniform (netCDF)
     or fail with a message about formats (text).
     """
-    try:
-        with open(path, "rb") as f:
-            head = f.read(8)
-    except OSError:
+    head = _first_bytes(path)
+    if head is None:
         return                           # the reader says what is wrong
     coords: list[np.ndarray] = []
-    if head.startswith((b"CDF", b"\x89HDF")):
+    if head.startswith(_NETCDF_MAGIC):
         try:
             with xr.open_dataset(path) as ds:
                 coords = [np.asarray(ds[c].values, float) for c in ("x", "y")
                           if c in ds.coords and ds[c].ndim == 1 and ds[c].size > 2]
         except Exception:  # noqa: BLE001 - unreadable here: the reader's message follows
             return
-    elif not any(b in head for b in (b"\x00",)):
+    elif b"\x00" not in head:
         try:
             data = np.loadtxt(path, ndmin=2, comments="#")
         except (ValueError, UnicodeDecodeError):
@@ -754,12 +763,10 @@ _TABLE_UNITS = {"U": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "micron": 1
 def _is_netcdf(path: Path) -> bool:
     """Whether ``path`` is a netCDF file (classic or HDF5), by its first bytes, whatever
     its extension."""
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(8)
-    except OSError:
+    head = _first_bytes(path)
+    if head is None:
         return path.suffix.lower() in (".nc", ".nc4", ".netcdf")
-    return head.startswith(b"CDF") or head.startswith(b"\x89HDF")
+    return head.startswith(_NETCDF_MAGIC)
 
 
 def _in_si(var, units: dict, key: str, path: Path) -> np.ndarray:

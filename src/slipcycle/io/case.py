@@ -225,7 +225,8 @@ class Section:
         """A 1-D grid: a list of values, or a table ``{start, stop, num}`` (``default``).
 
         The table form gives ``num`` values from ``start`` to ``stop`` inclusive, equally
-        spaced (or geometrically, with ``geometric``); bounds apply to every value.
+        spaced (or geometrically, with ``geometric``); bounds apply to every value; an
+        empty list is refused.
         """
         raw = self.data.get(key, default)
         if isinstance(raw, dict):
@@ -237,7 +238,10 @@ class Section:
             n = sub.int("num", ge=1, le=max_num)
             sub.finish()
             return np.geomspace(a, b, n) if geometric else np.linspace(a, b, n)
-        return np.atleast_1d(self.array(key, gt=gt, ge=ge, le=le)).ravel()
+        values = np.atleast_1d(self.array(key, gt=gt, ge=ge, le=le)).ravel()
+        if values.size == 0:   # a grid of no points: a study with nothing to compute
+            raise self.error(key, "must hold at least one value, got an empty list")
+        return values
 
     def ignore(self) -> None:
         """Accept every key of this table unread (a table another command uses)."""

@@ -45,10 +45,10 @@ from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.io.case import case_error_of, read_steady_tol
 from slipcycle.io.loads import step_tolerance
 from slipcycle.joints.lap_joint_protocol import (
-    PROTOCOL_NAME,
     STANDARD_PROTOCOLS,
     JointContact,
     Protocol,
+    protocol_name_problem,
     standard_protocol,
 )
 from slipcycle.joints.lap_joint_result import LapJointResult
@@ -201,10 +201,9 @@ def _read_protocols(ps: Section, joint, preload: float) -> tuple:
             or not all(isinstance(n, str) and n for n in names_raw)):
         raise ps.error("names", f"must be a non-empty list of protocol names, got "
                                 f"{names_raw!r}")
-    bad = [n for n in names_raw if not PROTOCOL_NAME.fullmatch(n)]
-    if bad:
-        raise ps.error("names", "a protocol name is letters, digits and _ . + - (starting "
-                                f"with a letter or digit; it names files), got {bad[0]!r}")
+    problem = next(filter(None, map(protocol_name_problem, names_raw)), None)
+    if problem is not None:
+        raise ps.error("names", problem)
     if len(set(names_raw)) != len(names_raw):
         raise ps.error("names", f"protocol names must be distinct, got {names_raw}")
     orders = ps.raw("orders", None)

@@ -79,6 +79,16 @@ __all__ = ["JointContact", "Step", "Protocol", "StudySettings", "STANDARD_PROTOC
 #: a protocol's name (a file name of its field output)
 PROTOCOL_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]*")
 
+
+def protocol_name_problem(name) -> str | None:
+    """What is wrong with ``name`` as a protocol's name, or None: it becomes a file name
+    of the field output, so no separators, no "..", nothing a shell or a file system
+    reads specially."""
+    if isinstance(name, str) and PROTOCOL_NAME.fullmatch(name):
+        return None
+    return ("a protocol name is letters, digits and _ . + - (starting with a letter or "
+            f"digit; it names files), got {name!r}")
+
 #: the standard tightening patterns of a row of K bolts (:func:`standard_protocol`)
 STANDARD_PROTOCOLS = ("sequential", "star", "reversed", "simultaneous")
 
@@ -215,11 +225,9 @@ class Protocol:
     steps: tuple
 
     def __post_init__(self):
-        if not isinstance(self.name, str) or not PROTOCOL_NAME.fullmatch(self.name):
-            # the name becomes a file name of the field output: no separators, no "..",
-            # nothing a shell or a file system reads specially
-            raise InputError("protocols", "a protocol name is letters, digits and _ . + - "
-                             f"(starting with a letter or digit), got {self.name!r}")
+        problem = protocol_name_problem(self.name)
+        if problem is not None:
+            raise InputError("protocols", problem)
         try:
             steps = tuple(_as_step(s) for s in self.steps)
         except InputError as exc:

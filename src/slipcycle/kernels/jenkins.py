@@ -39,6 +39,13 @@ _RTOL = 1e-13
 
 
 @njit(cache=True, inline="always")
+def at_root(r, qa, target):
+    """Whether the residual r = Σ clip − Q is the root's within round-off of the forces
+    summed, qa = Σ |clip| (relative tolerance ``_RTOL``)."""
+    return abs(r) <= _RTOL * (qa + abs(target))
+
+
+@njit(cache=True, inline="always")
 def _clip(x, c):
     if x > c:
         return c
@@ -109,7 +116,7 @@ def _newton(t, kt, cap, target, x, r, s, lo, hi, qmax, qa):
     g_hi = qmax - target
     side = 0
     for it in range(_MAX_NEWTON):
-        if abs(r) <= _RTOL * (qa + abs(target)):
+        if at_root(r, qa, target):
             return x, it
         if r < 0:
             lo, g_lo = x, r
@@ -382,7 +389,7 @@ def drive_force_moving_limits(t, level, kn, kt, inv_kt, friction, U_path, T_path
                 # breakpoint between 0 and it); else the safeguarded iteration
                 r0 = q0[p] - target
                 d = 0.0 - r0 / s0[p] if s0[p] > 0.0 else np.nan
-                if abs(r0) <= _RTOL * (qa0[p] + abs(target)):
+                if at_root(r0, qa0[p], target):
                     d = 0.0
                 elif not (below[p] < d < above[p]):
                     d, _ = _newton(t[:, p], ke[cur], cap[cur], target, 0.0, r0, s0[p],

@@ -50,12 +50,11 @@ def _axis(sec, key, default, **bounds):
     Raises
     ------
     CaseError
-        Naming the key, for an empty list or a value given twice (a repeated point would be
-        computed twice and makes the bisection between neighbours void).
+        Naming the key, for an empty list (:meth:`~slipcycle.io.case.Section.grid`) or
+        a value given twice (a repeated point would be computed twice and makes the
+        bisection between neighbours void).
     """
     vals = np.sort(sec.grid(key, default, max_num=10000, **bounds))
-    if vals.size == 0:
-        raise sec.error(key, "must hold at least one value, got an empty list")
     same = np.flatnonzero(np.diff(vals) <= 0.0)
     if same.size:
         raise sec.error(key, f"holds the value {vals[same[0]]:g} more than once; "

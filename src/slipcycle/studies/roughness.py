@@ -156,8 +156,7 @@ def parse_roughness_case(case):
     try:
         settings = RoughnessSettings(
             short_cutoffs=wavelengths("short_cutoffs"), long_cutoffs=wavelengths("long_cutoffs"),
-            phases=_nonempty(sec, "phases", sec.grid(
-                "phases", {"start": -np.pi, "stop": np.pi, "num": 13})),
+            phases=sec.grid("phases", {"start": -np.pi, "stop": np.pi, "num": 13}),
             grids=_counts(sec, "grids", [grid // 2, grid, 2 * grid], 8),
             sliders=_counts(sec, "sliders", [sliders // 4, sliders // 2, sliders], 10),
             rings=sec.int("rings", 24), tolerance=sec.float("tolerance", 0.05))

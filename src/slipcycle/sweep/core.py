@@ -355,13 +355,9 @@ class SweepStore:
 
     def _add(self, name, cshape, dtype, attrs) -> None:
         cshape = tuple(cshape)
-        if _is_text(dtype):
-            dt, fill = str, ""
-        else:
-            dt = np.dtype(dtype)
-            fill = np.nan if dt.kind == "f" else (False if dt.kind == "b" else -1)
+        dt = str if _is_text(dtype) else np.dtype(dtype)
         self._create(self.group, name, self.shape + cshape,
-                     (1,) * len(self.shape) + (cshape or ()), dt, fill)
+                     (1,) * len(self.shape) + (cshape or ()), dt, _fill(dtype))
         if attrs:
             self.group[name].attrs.update(attrs)
 
@@ -440,6 +436,8 @@ def _schema_attr(schema: Mapping) -> dict:
 
 
 def _fill(dtype):
+    """The value of a cell not (yet) written, of an output of ``dtype``: "" for text, NaN
+    for floats, False for booleans, -1 for integers."""
     if _is_text(dtype):
         return ""
     kind = np.dtype(dtype).kind
