@@ -92,6 +92,15 @@ def test_run_with_topography_profile_uses_the_bem_law(surface_dir, run_cli):
         s = json.loads((surface_dir / fit / "summary.json").read_text())
         assert s["profile"] == {"table": "tabulated", "exponential": "rough_exponential"}[fit]
         assert s["dissipation_per_cycle"] > 0
+        # the summary says which surface the law came from; σ recomputed from the file
+        heights = xr.open_dataset(surface_dir / "surface.nc").heights.values
+        surface = s["surface"]
+        assert surface["file"] == "surface.nc" and surface["fit"] == fit
+        assert surface["map_points"] == [32, 32] and surface["bem_grid"] == 32
+        assert surface["map_size"] == pytest.approx([1e-3, 1e-3], rel=1e-6)
+        assert surface["rms_height"] == pytest.approx(np.std(heights), rel=1e-6)
+        assert s["units"]["surface.rms_height"] == "m"
+        assert ("gamma_sigma" in surface) == (fit == "exponential")
 
 
 def test_base_install_refuses_in_one_line_naming_the_extra(surface_dir, run_cli,

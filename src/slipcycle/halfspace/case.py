@@ -268,8 +268,9 @@ def parse_case(case: Case) -> HalfspaceModel:
             if table in case.data:
                 case.section(table).ignore()
         case.finish()
-        settings.update(profile_name="", profile=topography_profile(
-            sec, profile, normal, ncontrol, protocol, steps, settings["n_sliders"]))
+        law = topography_profile(sec, profile, normal, ncontrol, protocol, steps,
+                                 settings["n_sliders"])
+        settings.update(profile_name="", profile=law, surface=profile.describe(law))
     try:
         model = HalfspaceModel(**settings)
     except InputError as exc:

@@ -62,6 +62,10 @@ class HalfspaceModel:
         Relative change of the cycle below which the history is steady, in (0, 1).
     profile_name : str
         Name of the profile in results (informative).
+    surface : dict
+        Description of a measured surface whose BEM law is ``profile`` (informative, for
+        the summary: :meth:`~slipcycle.halfspace.topography.TopographySource.describe`);
+        empty for analytic profiles.
 
     Raises
     ------
@@ -91,6 +95,7 @@ class HalfspaceModel:
     snapshots: np.ndarray = field(default_factory=lambda: np.array([0.0, np.pi / 2, np.pi]))
     steady_tol: float = 1e-9
     profile_name: str = ""
+    surface: dict = field(default_factory=dict)
 
     def __post_init__(self):
         if not callable(getattr(self.profile, "approach", None)):

@@ -14,6 +14,7 @@ from slipcycle.halfspace.bed import SliderBed
 from slipcycle.halfspace.history import HistoryResult
 from slipcycle.halfspace.model import HalfspaceModel
 from slipcycle.halfspace.profiles import RoughExponential
+from slipcycle.halfspace.topography import SURFACE_UNITS
 from slipcycle.halfspace.tractions import abel_operators, dissipation_density
 from slipcycle.io import RunOutputs
 from slipcycle.result import STEADY_STATES, RunResult, classify
@@ -243,6 +244,11 @@ class HalfspaceResult(RunResult):
                 summary["contact_size_max"] = float(np.interp(result.P[last].max(),
                                                               bed.edge_load, bed.edge_size))
                 units.update(permanent_stick_size="m", contact_size_max="m")
+        if model.surface:
+            # the measured surface behind a BEM law: which file, map and fit
+            summary["surface"] = dict(model.surface)
+            units.update({f"surface.{k}": u for k, u in SURFACE_UNITS.items()
+                          if k in model.surface})
         if isinstance(model.profile, RoughExponential) and result.gross_slip is None:
             P0 = float(model.normal.mean[0]) if hasattr(model.normal, "mean") else None
             if P0 and model.normal_control == "force":

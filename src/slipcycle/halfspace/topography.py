@@ -993,6 +993,27 @@ class TopographySource:
                              f"{self.fit_tolerance:.0%}; use fit = \"table\"")
         return RoughExponential(fit.gamma_sigma)
 
+    def describe(self, profile) -> dict:
+        """What a run's summary says of the surface behind its law ``profile`` (the
+        result of :meth:`profile`): the file, the map as read (points, size, σ after the
+        wavelength filter), the BEM grid, the fit and, for the exponential fit, γσ (units
+        in :data:`SURFACE_UNITS`)."""
+        native = self.native()
+        entries = {"file": self.path.name,
+                   "map_points": [int(k) for k in native.heights.shape],
+                   "map_size": [float(v) for v in native.size],
+                   "rms_height": native.rms_height,
+                   "bem_grid": int(self.bem_grid or max(native.heights.shape)),
+                   "nominal_area": self.nominal_area, "fit": self.fit}
+        if isinstance(profile, RoughExponential):
+            entries["gamma_sigma"] = float(profile.gamma_sigma)
+        return entries
+
+
+#: units of the numeric entries of :meth:`TopographySource.describe`
+SURFACE_UNITS = {"map_points": "1", "map_size": "m", "rms_height": "m", "bem_grid": "1",
+                 "nominal_area": "m2", "gamma_sigma": "m"}
+
 
 #: keys of ``[halfspace]`` read for ``profile = "topography"`` (besides E, nu, friction, ...)
 SOURCE_KEYS = ("topography_file", "nominal_area", "fit", "bem_grid", "bem_loads",
