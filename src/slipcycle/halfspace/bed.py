@@ -102,7 +102,15 @@ def rough_unit_bed(P_lo, P_max, n):
         Pa = P_lo + j * dP
         Pb = P_lo + (j + 1) * dP
         kn[j + 1] = dP                      # ΔS with S = dP/dU = P
-        level[j + 1] = (np.log(Pb) * Pb - np.log(Pa) * Pa - dP) / dP
+        # centroid (Pb ln Pb − Pa ln Pa − ΔP)/ΔP = ln Pa + (1 + r) ln(1 + r)/r − 1 with
+        # r = ΔP/Pa: the offset from ln Pa without the difference of two large
+        # products, which cancels to round-off in the thin cells of a tiny amplitude
+        r = (Pb - Pa) / Pa
+        if r < 1e-4:
+            offset = r * (0.5 - r * (1.0 / 6.0 - r * (1.0 / 12.0 - r / 20.0)))
+        else:
+            offset = (1.0 + r) * np.log1p(r) / r - 1.0
+        level[j + 1] = np.log(Pa) + offset
         edges[j + 2] = Pb
     edges[n + 1] = P_max
     return level, kn, edges
@@ -178,8 +186,43 @@ class SliderBed:
         return P_S, size
 
 
+#: fewest cells, as a fraction of ``n_sliders``, between the lowest load at which a slider
+#: can slip and the largest load (:func:`make_bed`, ``P_slip``)
+SLIP_CELLS = 0.1
+
+
+def _equal_stiffness_edges(profile, P_lo: float, P_max: float, n: int) -> np.ndarray:
+    """Loads (n + 1,) from ``P_lo`` to ``P_max`` at equal increments of S = dP/dU."""
+    # a fine table of S(P) to interpolate the loads of the stiffness targets
+    P_tab = P_lo + (P_max - P_lo) * np.linspace(0.0, 1.0, 8 * n + 1) ** 2
+    with np.errstate(divide="ignore"):
+        S_tab = 1.0 / profile.compliance(P_tab)
+    S_tab = np.maximum.accumulate(np.nan_to_num(S_tab, posinf=0.0))
+    P_edges = np.interp(np.linspace(S_tab[0], S_tab[-1], n + 1), S_tab, P_tab)
+    P_edges[0], P_edges[-1] = P_lo, P_max
+    return P_edges
+
+
+def _centroids(U_edges: np.ndarray, S_edges: np.ndarray, P_edges: np.ndarray) -> np.ndarray:
+    """Stiffness-weighted centroid ∫ s k ds / ∫ k ds of the levels of each cell (n,) [m]:
+    (Δ(U S) − ΔP)/ΔS, exact for any law. In a cell thin against its level (the cells of a
+    slip zone a millionth of the load wide) that difference cancels to round-off and may
+    land outside the cell; there the midpoint is taken, whose error, about ΔU ΔS/(12 S),
+    is then far below the cell's width."""
+    dS = np.diff(S_edges)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exact = (np.diff(U_edges * S_edges) - np.diff(P_edges)) / dS
+        # round-off of the difference, relative to the cell's width
+        noise = 4 * np.finfo(float).eps * (np.abs(U_edges * S_edges)[1:]
+                                          + np.abs(P_edges[1:])) / dS
+    lo, hi = U_edges[:-1], U_edges[1:]
+    mid = 0.5 * (lo + hi)
+    return np.where(noise < 1e-3 * (hi - lo), np.clip(exact, lo, hi), mid)
+
+
 def make_bed(profile, *, friction: float, compliance_ratio: float, P_max: float,
-             n_sliders: int = 1000, P_lo: float | None = None) -> SliderBed:
+             n_sliders: int = 1000, P_lo: float | None = None,
+             P_slip: float | None = None) -> SliderBed:
     """Discretise ``profile`` into a slider bed covering loads up to ``P_max``.
 
     The bed is the Ciavarella–Jäger equivalent of the contact: independent Coulomb
@@ -213,6 +256,13 @@ def make_bed(profile, *, friction: float, compliance_ratio: float, P_max: float,
         1e-6·P_max, and for the rough law (also when ≤ 0) to
         ``UNLUMPED_FRACTION``·P_max; a history's own value comes from
         :func:`lumping_load`. Ignored by profiles with an exact finite slider set.
+    P_slip : float, optional
+        Load (N or N/m) below which no slider slips in the history (:func:`lumping_load`).
+        Profiles with a first touch keep their cells from ``P_lo`` (their tractions cover
+        the whole contact); when fewer than :data:`SLIP_CELLS` × ``n_sliders`` of them lie
+        above ``P_slip`` (a slip zone thinner than a few cells, which the bed could not
+        resolve: a small tangential amplitude), ``n_sliders`` more cells are placed
+        between ``P_slip`` and ``P_max``.
 
     Returns
     -------
@@ -223,7 +273,7 @@ def make_bed(profile, *, friction: float, compliance_ratio: float, P_max: float,
         starts the bed) and ``edge_size`` (n + 1,) m, the contact radius or half-width at
         the edges (None for the rough law and profiles without a contact size). n is at
         most ``n_sliders`` + 1 (cells of zero stiffness increment are dropped; one more
-        for the lumped slider).
+        for the lumped slider), 2 ``n_sliders`` + 1 with the cells added above ``P_slip``.
 
     References
     ----------
@@ -251,22 +301,20 @@ def make_bed(profile, *, friction: float, compliance_ratio: float, P_max: float,
         return SliderBed(level, k, compliance_ratio, friction, edges, size)
 
     P_lo = 1e-6 * P_max if P_lo is None else P_lo
-    # Fine table of S(P) to place edges at equal stiffness increments.
-    P_tab = P_lo + (P_max - P_lo) * np.linspace(0.0, 1.0, 8 * n_sliders + 1) ** 2
-    with np.errstate(divide="ignore"):
-        S_tab = 1.0 / profile.compliance(P_tab)
-    S_tab = np.maximum.accumulate(np.nan_to_num(S_tab, posinf=0.0))
-    S_targets = np.linspace(S_tab[0], S_tab[-1], n_sliders + 1)
-    P_edges = np.interp(S_targets, S_tab, P_tab)
-    P_edges[0], P_edges[-1] = P_lo, P_max
+    P_edges = _equal_stiffness_edges(profile, P_lo, P_max, n_sliders)
+    if P_slip is not None and P_lo < P_slip < P_max \
+            and np.count_nonzero(P_edges > P_slip) < SLIP_CELLS * n_sliders:
+        # the loads at which sliders can slip span few cells (a small tangential
+        # amplitude: the slip annulus is thinner than a cell, and the bed would stick
+        # where the contact microslips): as many cells again, between P_slip and P_max
+        P_edges = np.union1d(P_edges, _equal_stiffness_edges(profile, P_slip, P_max,
+                                                             n_sliders))
     U_edges = profile.approach(P_edges)
     with np.errstate(divide="ignore"):
         S_edges = np.nan_to_num(1.0 / profile.compliance(P_edges), posinf=0.0)
     dS = np.diff(S_edges)
     keep = dS > 0
-    # stiffness-weighted centroid of the levels in each cell: ∫ s k ds / ∫ k ds
-    centroid = (np.diff(U_edges * S_edges) - np.diff(P_edges))[keep] / dS[keep]
-    level, k = centroid, dS[keep]
+    level, k = _centroids(U_edges, S_edges, P_edges)[keep], dS[keep]
     edges = np.concatenate([[P_edges[0]], P_edges[1:][keep]])
     if S_edges[0] > 0:  # lumped slider for everything below P_lo
         level = np.concatenate([[U_edges[0] - P_edges[0] / S_edges[0]], level])

@@ -261,19 +261,23 @@ class HalfspaceModel:
         """The slider bed covering every load level this history reaches.
 
         Profiles with a first touch get the default bed (exact from first touch, so that
-        tractions resolve the whole contact). The rough law lumps the sliders below
-        :meth:`lumping_load`, which never slip; with ``lump=False`` (or no bound) it lumps
-        only below ``UNLUMPED_FRACTION`` of the largest load.
+        tractions resolve the whole contact), with cells of its own for a slip zone that
+        would be thinner than a few cells (``P_slip`` of :func:`make_bed`). The rough law
+        lumps the sliders below :meth:`lumping_load`, which never slip; with
+        ``lump=False`` (or no bound) it lumps only below ``UNLUMPED_FRACTION`` of the
+        largest load.
         """
         hi = self.normal_load_range()[1]
         if self.normal_control == "approach":   # the largest load, from the exact law
             hi = _load_from_approach(self.profile, hi)
-        P_lo = None
+        P_lo = P_slip = None
         if not self.has_first_touch():
             P_lo = self.lumping_load() if lump else 0.0
+        else:   # a slip zone thinner than a few cells gets cells of its own
+            P_slip = self.lumping_load() or None
         return make_bed(self.profile, friction=self.friction,
                         compliance_ratio=self.compliance_ratio, P_max=hi * (1 + 1e-9),
-                        n_sliders=self.n_sliders, P_lo=P_lo)
+                        n_sliders=self.n_sliders, P_lo=P_lo, P_slip=P_slip)
 
 
 def _positive(name: str, value) -> None:
