@@ -11,7 +11,8 @@ contact node, a clamped node or a loaded node without rows is refused.
 
 The contact is body 1's surface ``contact``; with one body its counter-surface is rigid,
 with two each contact node of body 1 is paired with the node of body 2 at the same place
-(within ``tolerance``). Every node of a clamped set and of a set moved by a
+(within ``tolerance``); two bodies named from one export and mesh (two parts of one deck)
+share that one K. Every node of a clamped set and of a set moved by a
 ``displacement`` case is held (moved in its own case, at rest in the others; a force
 case all on held nodes would load nothing and is refused); everything
 else is condensed out by :func:`slipcycle.fe.contact3d.condense_contact_3d`, the engine of
@@ -51,7 +52,7 @@ from slipcycle.fe_import.surface import (
 )
 from slipcycle.io.case import CaseError
 from slipcycle.io.fe_formats import detect_format, read_raw
-from slipcycle.io.fe_formats.common import StiffnessError
+from slipcycle.io.fe_formats.common import StiffnessError, check_diagonal, file_error
 from slipcycle.io.fe_formats.dofmap import check_symmetric
 from slipcycle.io.matrices import ReducedStiffness
 
@@ -144,8 +145,21 @@ def _read_checked(spec: BodySpec, key: str):
         else:
             raw = read_raw(spec.stiffness, fmt, None)
         if raw.K is None:
-            raise CaseError(key, f"{spec.stiffness.name} holds reduced blocks A, B, C, not "
-                            "a stiffness K of the mesh's nodes")
+            raise file_error(spec.stiffness, "holds reduced blocks A, B, C, not a "
+                             "stiffness K of the mesh's nodes")
+        if raw.missing_labels is not None:
+            # the .dof (.mapping) is the only statement of which node each row belongs
+            # to; without it a partial copy or a failed run would be read by guesswork
+            raise file_error(spec.stiffness, f"{raw.missing_labels} is missing beside it "
+                             "(CalculiX writes jobname.dof with jobname.sti, ANSYS "
+                             "HBMAT Fname.mapping with Mapping = YES): it names the node and "
+                             "dof of each row, which cannot be matched to the mesh without "
+                             "it")
+        if not np.any(raw.K.data if sp.issparse(raw.K) else np.asarray(raw.K)):
+            raise file_error(spec.stiffness, "the stiffness is zero (every entry of K is 0)")
+        # a file cut short at a line boundary leaves rows without their diagonal entry
+        check_diagonal(raw.K, raw.labels if raw.transform is None else None,
+                       spec.stiffness.name)
         K = check_symmetric(raw.K, spec.stiffness.name)
     except StiffnessError as exc:
         where = spec.stiffness.name
@@ -188,6 +202,37 @@ def _rows(raw, K, mesh: ImportedMesh, spec: BodySpec):
                         f"than its elements and constraints can add ({allowed}: 3 internal "
                         "nodes per C3D8I element, and a few); is it the export of this mesh?")
     return dofs, int(np.sum(pos < 0))
+
+
+#: largest relative residual ‖K u‖ / (max row sum |K| · ‖u‖) of a rigid motion u of a
+#: free body's export: the stored K of a free body is round-off (1e-15) from leaving rigid
+#: motions free; one of a mesh whose nodes moved since is off by the relative move
+RIGID_RTOL = 1e-6
+
+
+def _check_rigid_modes(K, raw, dofs: np.ndarray, mesh: ImportedMesh, spec: BodySpec) -> None:
+    """Refuse a CalculiX stiffness of a free body that does not leave the rigid motions of
+    the mesh's nodes free: it is the export of other coordinates (a deck edited after ccx
+    ran; the labels alone cannot tell). ccx leaves a fixed dof out of the ``.sti``, so a
+    body with every mesh dof in it is free, and K u = 0 for the three translations and the
+    three rotations u = ω × x of its nodes (other rows, the internal dofs of C3D8I, at 0:
+    they carry no strain in a rigid motion). Exports with rotation rows are not checked."""
+    if raw.labels is not None and np.any(np.asarray(raw.labels)[:, 1] > 3):
+        return
+    x = mesh.points - mesh.points.mean(axis=0)
+    U = np.zeros((K.shape[0], 6))
+    for a in range(3):
+        U[dofs[:, a], a] = 1.0
+        U[dofs[:, a], 3:] = np.cross(np.eye(3), x[:, None, :])[:, :, a]
+    res = np.linalg.norm(K @ U, axis=0) / (abs(K).sum(axis=1).max() * np.linalg.norm(U, axis=0))
+    if not res.max() <= RIGID_RTOL:
+        worst = int(np.argmax(res))
+        motion = (f"translation along {_AXES[worst]}" if worst < 3
+                  else f"rotation about {_AXES[worst - 3]}")
+        raise CaseError(f"{spec.key}.stiffness", f"{spec.stiffness.name} is not the stiffness "
+                        f"of {mesh.path.name}'s nodes where they are now: a rigid {motion} "
+                        f"of the free body is resisted (relative residual {res.max():.1e} > "
+                        f"{RIGID_RTOL:g}); was the deck changed after ccx ran? Run ccx again")
 
 
 def _faces_named(mesh: ImportedMesh, name: str, key: str):
@@ -257,13 +302,16 @@ def _set_nodes(mesh: ImportedMesh, name: str, key: str) -> np.ndarray:
     return mesh.node_sets[hit]
 
 
-def read_body(spec: BodySpec) -> ImportedBody:
+def read_body(spec: BodySpec, same: ImportedBody | None = None) -> ImportedBody:
     """Read one body's export and mesh, its contact surface and its checks.
 
     Parameters
     ----------
     spec : BodySpec
         The body's files, sets and units.
+    same : ImportedBody, optional
+        A body read already from the same export and mesh (two bodies of one deck): its
+        mesh and stiffness are taken, and only ``spec``'s contact is read.
 
     Returns
     -------
@@ -277,6 +325,10 @@ def read_body(spec: BodySpec) -> ImportedBody:
         Naming the body's key: an unreadable export or mesh, an export of another mesh,
         a missing set or surface.
     """
+    if same is not None:
+        faces, contact = _contact(same.mesh, same.absent, spec)
+        return dataclasses.replace(same, faces=faces, contact=contact, info={
+            **same.info, "contact": spec.contact, "contact_nodes": int(contact.size)})
     length, stiff = UNITS[spec.units]
     mesh = read_mesh(spec.mesh, f"{spec.key}.mesh", length)
     raw, K, fmt = _read_export(spec)
@@ -290,6 +342,23 @@ def read_body(spec: BodySpec) -> ImportedBody:
     others = np.concatenate([unused, K.shape[0] + extra + np.arange(pad)]).reshape(-1, 3)
     if extra + pad:
         K = sp.block_diag([K, sp.identity(extra + pad)], format="csr")
+    faces, contact = _contact(mesh, absent, spec)
+    if fmt == "calculix" and not absent.any():
+        _check_rigid_modes(K, raw, dofs, mesh, spec)
+    info = {"stiffness": str(spec.stiffness), "format": fmt,
+            # what the deck's numbers were read as; everything written is m, N, Pa
+            "units": {"m": "m, N, Pa", "mm": "mm, N, MPa (K in N/mm)"}[spec.units],
+            "rows": int(K.shape[0] - extra - pad), "rows_condensed_not_mesh": int(unused.size),
+            "mesh": str(spec.mesh), "mesh_nodes": len(mesh.labels),
+            "elements": {k: int(len(v)) for k, v in mesh.cells.items()},
+            "rows_of_other_nodes": foreign, "mesh_dofs_without_rows": extra,
+            "contact": spec.contact, "contact_nodes": int(contact.size)}
+    return ImportedBody(mesh, K, dofs, absent, others, faces, contact, info)
+
+
+def _contact(mesh: ImportedMesh, absent: np.ndarray, spec: BodySpec):
+    """The faces and nodes of ``spec``'s contact, checked: faces with an area, every
+    node with its rows in the export."""
     faces = _faces_named(mesh, spec.contact, f"{spec.key}.contact")
     _check_areas(mesh, faces, spec.contact, f"{spec.key}.contact")
     contact = surface_nodes(faces)
@@ -300,22 +369,31 @@ def read_body(spec: BodySpec) -> ImportedBody:
         j = contact[bad[0]]
         raise CaseError(f"{spec.key}.stiffness", f"{spec.stiffness.name} has no row for "
                         f"u_{_AXES[int(np.argmax(absent[j]))]} of contact node "
-                        f"{mesh.labels[j]}: the deck fixes it (*BOUNDARY) or the export "
-                        "does not hold it")
-    info = {"stiffness": str(spec.stiffness), "format": fmt,
-            "rows": int(K.shape[0] - extra - pad), "rows_condensed_not_mesh": int(unused.size),
-            "mesh": str(spec.mesh), "mesh_nodes": len(mesh.labels),
-            "elements": {k: int(len(v)) for k, v in mesh.cells.items()},
-            "rows_of_other_nodes": foreign, "mesh_dofs_without_rows": extra,
-            "contact": spec.contact, "contact_nodes": int(contact.size)}
-    return ImportedBody(mesh, K, dofs, absent, others, faces, contact, info)
+                        f"{mesh.labels[j]}: the deck fixes it (*BOUNDARY) or constrains "
+                        "it (*EQUATION, *TIE, ...), or the export does not hold it")
+    return faces, contact
 
 
-def _held(body: ImportedBody, names, key: str, what: str) -> np.ndarray:
+def _same_export(specs) -> bool:
+    """Whether two bodies are read from one export and one mesh (two bodies of one deck,
+    as CalculiX meshes a *CONTACT PAIR): their stiffness is then one K, not two copies."""
+    if len(specs) != 2:
+        return False
+    a, b = specs
+    return (a.stiffness.resolve() == b.stiffness.resolve()
+            and a.mesh.resolve() == b.mesh.resolve()
+            and (a.units, a.format) == (b.units, b.format))
+
+
+def _held(body: ImportedBody, names, key: str, what: str,
+          contact: np.ndarray | None = None) -> np.ndarray:
+    """The nodes of the sets ``names``, none of them a contact node (``contact``; by
+    default the body's own) and all with rows in the export."""
+    contact = body.contact if contact is None else contact
     nodes = np.unique(np.concatenate([_set_nodes(body.mesh, n, key) for n in names])
                       if names else np.zeros(0, np.int64))
-    if np.isin(nodes, body.contact).any():
-        j = nodes[np.isin(nodes, body.contact)][0]
+    if np.isin(nodes, contact).any():
+        j = nodes[np.isin(nodes, contact)][0]
         raise CaseError(key, f"{what} holds contact node {body.mesh.labels[j]}; a contact "
                         "node must be free")
     lack = nodes[body.absent[nodes].any(axis=1)]
@@ -349,8 +427,10 @@ def _pairs(b1: ImportedBody, b2: ImportedBody | None, tolerance: float, key: str
     return c1, b2.contact[idx]
 
 
-def _cases(model: ImportModel, bodies, offsets, n_all: int, fixed: np.ndarray) -> list:
-    """The :class:`Case3D` of every load, and the held mask of the moved sets."""
+def _cases(model: ImportModel, bodies, offsets, n_all: int, fixed: np.ndarray,
+           contacts: list) -> list:
+    """The :class:`Case3D` of every load, and the held mask of the moved sets
+    (``contacts``: the contact nodes of each body's mesh, that no load may hold)."""
     cases = []
     for ld in model.loads:
         body, off = bodies[ld.body], offsets[ld.body]
@@ -360,7 +440,7 @@ def _cases(model: ImportModel, bodies, offsets, n_all: int, fixed: np.ndarray) -
             nodes = surface_nodes(faces)
         else:
             nodes = _set_nodes(body.mesh, ld.target, target)
-        on = nodes[np.isin(nodes, body.contact)]
+        on = nodes[np.isin(nodes, contacts[ld.body])]
         if on.size:
             raise CaseError(target, f"{ld.target!r} holds contact node "
                             f"{body.mesh.labels[on[0]]}: a load on a contact node is not "
@@ -440,32 +520,47 @@ def import_joint(model: ImportModel) -> ImportedJoint:
         load or clamp on a contact node, an export that is unreadable, of another mesh or
         not positive definite, a body not held against rigid motion.
     """
-    bodies = [read_body(spec) for spec in model.bodies]
+    shared = _same_export(model.bodies)
+    bodies = [read_body(model.bodies[0])]
+    bodies += [read_body(spec, bodies[0] if shared else None) for spec in model.bodies[1:]]
     b2 = bodies[1] if len(bodies) == 2 else None
     if b2 is not None:
         _check_facing(bodies[0], b2, model.bodies, f"{model.bodies[1].key}.contact")
     c1, c2 = _pairs(bodies[0], b2, model.tolerance, "fe_import.tolerance")
-    sizes = [len(b.mesh.labels) + len(b.others) for b in bodies]
+    # two bodies of one deck share one K and one numbering of the nodes: each body's
+    # loads and clamps must then keep off both contacts
+    blocks = bodies[:1] if shared else bodies
+    contacts = ([np.union1d(bodies[0].contact, b2.contact)] * 2 if shared
+                else [b.contact for b in bodies])
+    if shared and np.intersect1d(bodies[0].contact, b2.contact).size:
+        j = np.intersect1d(bodies[0].contact, b2.contact)[0]
+        raise CaseError(f"{model.bodies[1].key}.contact", f"node {bodies[0].mesh.labels[j]} "
+                        f"lies on both contacts, {model.bodies[0].contact!r} and "
+                        f"{model.bodies[1].contact!r}: the two bodies of a pair do not "
+                        "share nodes")
+    sizes = [len(b.mesh.labels) + len(b.others) for b in blocks]
     offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int)
-    rows = np.concatenate([[0], np.cumsum([b.K.shape[0] for b in bodies])[:-1]]).astype(int)
+    rows = np.concatenate([[0], np.cumsum([b.K.shape[0] for b in blocks])[:-1]]).astype(int)
+    if shared:
+        offsets = np.zeros(2, int)
     n_all = int(sum(sizes))
     dofs = np.vstack([np.vstack([b.dofs, b.others]) + r
-                      for b, r in zip(bodies, rows, strict=True)])
+                      for b, r in zip(blocks, rows, strict=True)])
     xyz = np.vstack([np.vstack([b.mesh.points, np.zeros((len(b.others), 3))])
-                     for b in bodies]).T
+                     for b in blocks]).T
     fixed = np.vstack([np.vstack([b.absent, np.zeros((len(b.others), 3), bool)])
-                       for b in bodies])
-    for b, spec, off in zip(bodies, model.bodies, offsets, strict=True):
-        fixed[off + _held(b, spec.clamped, f"{spec.key}.clamped", "clamped")] = True
-    cases = _cases(model, bodies, offsets, n_all, fixed)
+                       for b in blocks])
+    for b, spec, off, busy in zip(bodies, model.bodies, offsets, contacts, strict=True):
+        fixed[off + _held(b, spec.clamped, f"{spec.key}.clamped", "clamped", busy)] = True
+    cases = _cases(model, bodies, offsets, n_all, fixed, contacts)
     _check_free_forces(model, cases, fixed)
     if b2 is not None and np.isin(c2, b2.contact[fixed[offsets[1] + b2.contact].any(1)]).any():
         raise CaseError("fe_import.body[1].clamped", "a contact node of body 2 is held")
     pairs = np.column_stack([c1, np.where(c2 >= 0, c2 + offsets[-1], -1)])
     normals = node_normals(bodies[0].mesh.points, bodies[0].faces, c1)
-    K = sp.block_diag([b.K for b in bodies], format="csr")
+    K = sp.block_diag([b.K for b in blocks], format="csr")
     source = "; ".join(f"{b.info['stiffness']} ({b.info['format']}) on {b.info['mesh']}"
-                       for b in bodies)
+                       for b in blocks)
     try:
         red = condense_contact_3d(lambda: (K, "imported"), dofs, xyz, pairs=pairs,
                                   normals=normals, fixed=fixed, cases=cases, source=source)

@@ -3,7 +3,9 @@
 Two sources:
 
 - an Abaqus / CalculiX input deck (``.inp``), scanned for ``*NODE``, ``*ELEMENT``,
-  ``*NSET``, ``*ELSET``, ``*SURFACE`` and ``*INCLUDE`` (every other keyword is skipped).
+  ``*NSET``, ``*ELSET``, ``*SURFACE`` and ``*INCLUDE`` (every other keyword is skipped but
+  ``*BOUNDARY``, whose non-zero prescribed displacements are refused: the export holds a
+  fixed dof at zero).
   meshio 5.3 reads the nodes and elements of a deck but drops the node labels (which the
   stiffness export uses), the element labels and ``*SURFACE`` (which names the contact as
   element faces ``ELSET, S1``), and a second ``*NODE`` block replaces the first; so the deck
@@ -13,8 +15,11 @@ Two sources:
   physical group of triangles or quadrilaterals is a surface.
 
 Element node orders are those of Abaqus/CalculiX (``C3D4``, ``C3D10``, ``C3D8``,
-``C3D8I``, ``C3D8R``, ``C3D6``), which are those of VTK/meshio for the same elements; their
-faces are numbered S1…S6 as in the CalculiX CrunchiX User's Manual (§6.2, element types).
+``C3D8I``, ``C3D8R``, ``C3D20``, ``C3D20R``, ``C3D6``, ``C3D15``), which are those of
+VTK/meshio for the same elements (corners first, then the mid-side nodes edge by edge);
+their faces are numbered S1…S6 as in the CalculiX CrunchiX User's Manual (§6.2, element
+types). A face of a quadratic element lists its corners, then its mid-side nodes
+(between corners 1–2, 2–3, ...).
 """
 
 from __future__ import annotations
@@ -31,7 +36,8 @@ __all__ = ["ImportedMesh", "FaceSet", "read_mesh", "read_deck", "FACES", "ELEMEN
 
 #: solid element word of a deck → kind (meshio's cell type)
 ELEMENT_KINDS = {"C3D4": "tetra", "C3D10": "tetra10", "C3D8": "hexahedron",
-                 "C3D8I": "hexahedron", "C3D8R": "hexahedron", "C3D6": "wedge"}
+                 "C3D8I": "hexahedron", "C3D8R": "hexahedron", "C3D20": "hexahedron20",
+                 "C3D20R": "hexahedron20", "C3D6": "wedge", "C3D15": "wedge15"}
 
 #: faces S1, S2, ... of each kind: local node positions (0-based), corners first
 FACES = {
@@ -41,14 +47,27 @@ FACES = {
     "hexahedron": ((0, 1, 2, 3), (4, 7, 6, 5), (0, 4, 5, 1), (1, 5, 6, 2), (2, 6, 7, 3),
                    (3, 7, 4, 0)),
     "wedge": ((0, 1, 2), (3, 5, 4), (0, 3, 4, 1), (1, 4, 5, 2), (2, 5, 3, 0)),
+    # mid-side nodes 8..19 on the edges 0-1, 1-2, 2-3, 3-0, 4-5, 5-6, 6-7, 7-4, 0-4, 1-5,
+    # 2-6, 3-7 (CalculiX manual, C3D20)
+    "hexahedron20": ((0, 1, 2, 3, 8, 9, 10, 11), (4, 7, 6, 5, 15, 14, 13, 12),
+                     (0, 4, 5, 1, 16, 12, 17, 8), (1, 5, 6, 2, 17, 13, 18, 9),
+                     (2, 6, 7, 3, 18, 14, 19, 10), (3, 7, 4, 0, 19, 15, 16, 11)),
+    # mid-side nodes 6..14 on the edges 0-1, 1-2, 2-0, 3-4, 4-5, 5-3, 0-3, 1-4, 2-5 (C3D15)
+    "wedge15": ((0, 1, 2, 6, 7, 8), (3, 5, 4, 11, 10, 9), (0, 3, 4, 1, 12, 9, 13, 6),
+                (1, 4, 5, 2, 13, 10, 14, 7), (2, 5, 3, 0, 14, 11, 12, 8)),
 }
-_NODES_PER = {"tetra": 4, "tetra10": 10, "hexahedron": 8, "wedge": 6}
-_SURFACE_CELLS = {"triangle": "tri3", "triangle6": "tri6", "quad": "quad4"}
+_NODES_PER = {"tetra": 4, "tetra10": 10, "hexahedron": 8, "wedge": 6, "hexahedron20": 20,
+              "wedge15": 15}
 
 
 def face_kind(n_nodes: int) -> str:
-    """``tri3``, ``tri6`` or ``quad4`` of a face with ``n_nodes`` nodes."""
-    return {3: "tri3", 6: "tri6", 4: "quad4"}[n_nodes]
+    """``tri3``, ``tri6``, ``quad4`` or ``quad8`` of a face with ``n_nodes`` nodes."""
+    return {3: "tri3", 6: "tri6", 4: "quad4", 8: "quad8"}[n_nodes]
+
+
+def _face_corners(n_nodes: int) -> int:
+    """The corners of a face of ``n_nodes`` nodes (listed first): 3 or 4."""
+    return 3 if n_nodes in (3, 6) else 4
 
 
 @dataclass(frozen=True)
@@ -58,7 +77,7 @@ class FaceSet:
     Attributes
     ----------
     kind : str
-        ``tri3``, ``tri6`` or ``quad4``.
+        ``tri3``, ``tri6``, ``quad4`` or ``quad8``.
     nodes : numpy.ndarray of int, shape (k, m)
         Mesh node indices of each face, corners first, in the order of the face's
         parametrisation.
@@ -80,7 +99,7 @@ class FaceSet:
     def corners(self) -> np.ndarray:
         """(k, 3 or 4) node indices of each face's corners, sorted along each row: the
         same face of two elements gives the same row."""
-        return np.sort(self.nodes[:, :4 if self.kind == "quad4" else 3], axis=1)
+        return np.sort(self.nodes[:, :_face_corners(self.nodes.shape[1])], axis=1)
 
     def name(self, row: int, labels: np.ndarray) -> str:
         """``element 12, S2`` (a deck's face) or ``the face of nodes 3, 4, 9`` (node
@@ -137,8 +156,7 @@ class ImportedMesh:
         keys, owners = [], []
         for kind, conn in self.cells.items():
             for f, local in enumerate(FACES[kind]):
-                corners = np.sort(conn[:, list(local[:3 if len(local) in (3, 6) else 4])],
-                                  axis=1)
+                corners = np.sort(conn[:, list(local[:_face_corners(len(local))])], axis=1)
                 keys.append(corners if corners.shape[1] == 4 else
                             np.column_stack([corners, np.full(len(corners), -1)]))
                 owners.append((kind, f))
@@ -159,7 +177,8 @@ class ImportedMesh:
 
 
 def _corner_count(kind: str) -> int:
-    return {"tetra": 4, "tetra10": 4, "hexahedron": 8, "wedge": 6}[kind]
+    return {"tetra": 4, "tetra10": 4, "hexahedron": 8, "wedge": 6, "hexahedron20": 8,
+            "wedge15": 6}[kind]
 
 
 # -- deck -------------------------------------------------------------------------------------
@@ -385,6 +404,25 @@ class _Deck:
             self.surface(tokens, where, params, s)
         elif mode == "INSTANCE" and self.instance:
             self.instance["lines"].append(_numbers(tokens, where, self.key, float))
+        elif mode == "BOUNDARY":
+            self.boundary(tokens, where)
+
+    def boundary(self, tokens, where: str) -> None:
+        """Refuse a ``*BOUNDARY`` line that prescribes a non-zero displacement (node or
+        set, first dof, last dof, value): the stiffness export leaves a fixed dof out,
+        and slipcycle can only hold such a dof at zero, not at the deck's value."""
+        if len(tokens) < 4 or not tokens[3]:
+            return
+        try:
+            value = float(tokens[3].replace("D", "E").replace("d", "e"))
+        except ValueError:
+            return
+        if value != 0.0:
+            raise CaseError(self.key, f"{where}: *BOUNDARY prescribes {value:g} on dofs "
+                            f"{tokens[1]}-{tokens[2] or tokens[1]} of {tokens[0]}; a fixed "
+                            "dof has no row in the stiffness export and would be held at 0: "
+                            "leave it free in the deck and move it with a [[fe_import.load]] "
+                            "displacement")
 
 
 def read_deck(path: Path, key: str, scale: float = 1.0) -> ImportedMesh:
@@ -491,8 +529,8 @@ def read_mesh(path: Path, key: str, scale: float = 1.0) -> ImportedMesh:
         if block.type in _NODES_PER:
             cells.setdefault(block.type, []).append(np.asarray(block.data, np.int64))
     if not cells:
-        raise CaseError(key, f"{path.name} has no solid elements (tetra, tetra10, "
-                        "hexahedron, wedge)")
+        raise CaseError(key, f"{path.name} has no solid elements (" +
+                        ", ".join(_NODES_PER) + ")")
     cells = {k: np.vstack(v) for k, v in cells.items()}
     points = np.asarray(m.points, float)
     if points.shape[1] != 3:
@@ -516,7 +554,7 @@ def _with_meshio_surfaces(mesh: ImportedMesh, m) -> ImportedMesh:
     bound = mesh.boundary_faces()
     lookup = {}
     for fs in bound:
-        ncorner = 3 if fs.kind in ("tri3", "tri6") else 4
+        ncorner = _face_corners(fs.nodes.shape[1])
         for row, key in enumerate(map(tuple, np.sort(fs.nodes[:, :ncorner], axis=1))):
             lookup[key] = (fs, row)
     surfaces = {}

@@ -1,10 +1,11 @@
 """Geometry of element faces: outward normals, tributary areas, consistent pressure loads.
 
-A face (``tri3``, ``tri6``, ``quad4``) is x(ξ, η) = Σ_a N_a(ξ, η) x_a with the shape
-functions of its element; a = x_ξ × x_η dξ dη is its area element, oriented out of the
-element that owns it (away from that element's centroid). With Gauss quadrature (2 × 2
-on quadrilaterals; the 3-point rule of degree 2 on triangles: Zienkiewicz, Taylor & Zhu,
-*The Finite Element Method*, 7th ed., §6.5, Tables 6.3–6.4):
+A face (``tri3``, ``tri6``, ``quad4``, ``quad8``) is x(ξ, η) = Σ_a N_a(ξ, η) x_a with the
+shape functions of its element (the 8-node face of C3D20 and C3D15 is the serendipity
+quadrilateral); a = x_ξ × x_η dξ dη is its area element, oriented out of the element that
+owns it (away from that element's centroid). With Gauss quadrature (2 × 2 on 4-node
+quadrilaterals, 3 × 3 on 8-node ones; the 3-point rule of degree 2 on triangles:
+Zienkiewicz, Taylor & Zhu, *The Finite Element Method*, 7th ed., §6.5, Tables 6.3–6.4):
 
 - the consistent nodal forces of a uniform pressure p (positive pushing into the body)
   are f_a = −p ∫ N_a n dA;
@@ -12,10 +13,14 @@ on quadrilaterals; the 3-point rule of degree 2 on triangles: Zienkiewicz, Taylo
   quarter of a rectangle to each corner); on a 6-node triangle, whose corner integrals are
   zero, each of the four sub-triangles cut by the mid-points gives a third of its area to
   its vertices: A/12 to a corner, A/4 to a mid-point (the rule of
-  :func:`slipcycle.fe.meshfile3d.node_areas` for P2 surfaces). The areas of a surface sum
-  to its area;
+  :func:`slipcycle.fe.meshfile3d.node_areas` for P2 surfaces). An 8-node quadrilateral,
+  whose corner integrals are negative, is cut the same way by its mid-points into four
+  corner triangles (an eighth of a parallelogram each, a third of it to each vertex) and
+  the quadrilateral of the mid-points (half, a quarter of it to each): A/24 to a corner,
+  5A/24 to a mid-point. The areas of a surface sum to its area;
 - a node's outward normal is the normalised sum of ∫ N_a n dA over its faces (for a 6-node
-  triangle the sub-triangle weights above), i.e. the area-weighted mean normal.
+  triangle and an 8-node quadrilateral the sub-triangle weights above), i.e. the
+  area-weighted mean normal.
 """
 
 from __future__ import annotations
@@ -32,10 +37,21 @@ _G = 1 / np.sqrt(3.0)
 _QUAD_PTS = np.array([[-_G, -_G], [_G, -_G], [_G, _G], [-_G, _G]])
 _QUAD_W = np.ones(4)
 _QUAD_XI = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
+_G3 = np.sqrt(0.6)
+_QUAD8_PTS = np.array([[a, b] for b in (-_G3, 0.0, _G3) for a in (-_G3, 0.0, _G3)])
+_QUAD8_W = np.array([a * b for b in (5, 8, 5) for a in (5, 8, 5)]) / 81.0
+#: (ξ, η) of the nodes of an 8-node face: corners, then the mid-points of 1-2, 2-3, 3-4, 4-1
+_QUAD8_XI = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1], [0, -1], [1, 0], [0, 1],
+                      [-1, 0]], float)
+#: share of the face's area of each node of a quadratic face (module docstring)
+_SHARE = {"tri6": np.array([1 / 12] * 3 + [1 / 4] * 3),
+          "quad8": np.array([1 / 24] * 4 + [5 / 24] * 4)}
 
 
 def _shape(kind: str):
     """(weights (q,), N (q, m), dN/dξ (q, m), dN/dη (q, m)) at the Gauss points."""
+    if kind == "quad8":
+        return (_QUAD8_W, *_serendipity(_QUAD8_PTS[:, :1], _QUAD8_PTS[:, 1:]))
     if kind == "quad4":
         xi, eta = _QUAD_PTS[:, :1], _QUAD_PTS[:, 1:]
         a, b = _QUAD_XI[:, 0], _QUAD_XI[:, 1]
@@ -52,6 +68,21 @@ def _shape(kind: str):
     dr = np.column_stack([1 - 4 * L1, 4 * r - 1, 0 * r, 4 * (L1 - r), 4 * s, -4 * s])
     ds = np.column_stack([1 - 4 * L1, 0 * r, 4 * s - 1, -4 * r, 4 * r, 4 * (L1 - s)])
     return _TRI_W, N, dr, ds
+
+
+def _serendipity(xi: np.ndarray, eta: np.ndarray):
+    """N, dN/dξ, dN/dη (q, 8) of the 8-node serendipity quadrilateral at (ξ, η) (q, 1)
+    (Zienkiewicz, Taylor & Zhu, §6.4)."""
+    a, b = _QUAD8_XI[:, 0], _QUAD8_XI[:, 1]
+    corner, mid_x, mid_y = np.arange(8) < 4, a == 0, b == 0
+    N = np.where(corner, 0.25 * (1 + a * xi) * (1 + b * eta) * (a * xi + b * eta - 1),
+                 np.where(mid_x, 0.5 * (1 - xi ** 2) * (1 + b * eta),
+                          0.5 * (1 + a * xi) * (1 - eta ** 2)))
+    dxi = np.where(corner, 0.25 * a * (1 + b * eta) * (2 * a * xi + b * eta),
+                   np.where(mid_x, -xi * (1 + b * eta), 0.5 * a * (1 - eta ** 2)))
+    deta = np.where(corner, 0.25 * b * (1 + a * xi) * (a * xi + 2 * b * eta),
+                    np.where(mid_y, -eta * (1 + a * xi), 0.5 * b * (1 - xi ** 2)))
+    return N, dxi, deta
 
 
 def _area_vectors(points: np.ndarray, fs: FaceSet) -> tuple[np.ndarray, np.ndarray]:
@@ -80,11 +111,10 @@ def surface_nodes(facesets: list[FaceSet]) -> np.ndarray:
 def _weights(points: np.ndarray, fs: FaceSet) -> np.ndarray:
     """Area vector of each face node (k, m, 3): ∫ N_a n dA, or the sub-triangle rule."""
     N, a = _area_vectors(points, fs)
-    if fs.kind != "tri6":
+    if fs.kind not in _SHARE:
         return np.einsum("qm,kqd->kmd", N, a)
     whole = a.sum(axis=1)                                    # (k, 3): A n of each face
-    share = np.array([1 / 12] * 3 + [1 / 4] * 3)
-    return share[None, :, None] * whole[:, None, :]
+    return _SHARE[fs.kind][None, :, None] * whole[:, None, :]
 
 
 def node_normals(points: np.ndarray, facesets: list[FaceSet], nodes: np.ndarray
@@ -103,7 +133,7 @@ def node_areas(points: np.ndarray, facesets: list[FaceSet], nodes: np.ndarray) -
     for fs in facesets:
         np.add.at(acc, fs.nodes.ravel(),
                   np.linalg.norm(_weights(points, fs), axis=2).ravel()
-                  if fs.kind == "tri6" else
+                  if fs.kind in _SHARE else
                   np.einsum("qm,kq->km", *_n_and_da(points, fs)).ravel())
     return acc[nodes]
 
