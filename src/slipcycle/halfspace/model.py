@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -11,8 +12,15 @@ from slipcycle.halfspace.bed import SliderBed, lumped_slider_slipped, lumping_lo
 from slipcycle.halfspace.elastic import ContactElasticity
 from slipcycle.halfspace.history import HistoryResult, run_history
 from slipcycle.halfspace.loads import contact_loads
-from slipcycle.halfspace.profiles import Cylinder2D, RoughExponential, Tabulated
+from slipcycle.halfspace.profiles import (
+    Cylinder2D,
+    RoughExponential,
+    Tabulated,
+    slope_warning,
+)
 from slipcycle.loading import cycle_angles, piecewise_linear_path
+
+log = logging.getLogger("slipcycle")
 
 __all__ = ["HalfspaceModel", "LoadPathError", "solve"]
 
@@ -349,6 +357,9 @@ def solve(model: HalfspaceModel, *, record_last_cycle: bool = True
     """
     model.check_loads()
     bed = model.bed()
+    slope = slope_warning(model.profile, float(bed.edge_load[-1]))
+    if slope:
+        log.warning("halfspace: %s", slope)
     result = _run(model, bed, record_last_cycle)
     if not model.has_first_touch() and bed.size > 1 and bed.level[0] < bed.level[1] \
             and lumped_slider_slipped(result.first_slip) and model.lumping_load() > 0:

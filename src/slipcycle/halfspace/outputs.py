@@ -226,6 +226,9 @@ class HalfspaceResult(RunResult):
                 summary["warnings"] = [f"Dundurs beta = {model.elasticity.dundurs_beta:.3f}: "
                                        "the materials are dissimilar, so the uncoupled theory "
                                        "is approximate"]
+        slope = pr.slope_warning(model.profile, float(bed.edge_load[-1]))
+        if slope:
+            summary.setdefault("warnings", []).append(slope)
         if result.gross_slip is not None:
             g = result.gross_slip
             # when: step and cycle (-1: during the assembly path) and angle; where: P and Q

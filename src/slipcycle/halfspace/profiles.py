@@ -95,6 +95,11 @@ class PowerLaw:
     def contact_size(self, P):
         return self._a_from_P(P)
 
+    def edge_slope(self, P):
+        """Slope dz/dr = n c a^{n−1} of the profile at the contact edge under load ``P``
+        (the half-space theory assumes it small; a/R for the sphere)."""
+        return self.n * self.c * self._a_from_P(P) ** (self.n - 1)
+
     def approach(self, P):
         return self.kappa * self.c * self._a_from_P(P) ** self.n
 
@@ -160,6 +165,10 @@ class Cylinder2D:
     def contact_size(self, P):
         P = np.maximum(np.asarray(P, float), 0.0)
         return np.sqrt(4 * P * self.radius / (math.pi * self.contact_modulus))
+
+    def edge_slope(self, P):
+        """Slope a/R of the profile at the contact edge under load ``P`` (N/m)."""
+        return self.contact_size(P) / self.radius
 
     def approach(self, P):
         P = np.maximum(np.asarray(P, float), 0.0)
@@ -300,3 +309,24 @@ class Tabulated:
         jumps = np.diff(np.concatenate([[0.0], self.slopes]))
         keep = jumps > 0
         return self.U[:-1][keep], jumps[keep]
+
+
+#: largest profile slope at the contact edge without a warning: the half-space theory
+#: (Hertz; Johnson 1985, §4.2) assumes a contact small against the radius, a/R ≪ 1
+SLOPE_WARNING = 0.1
+
+
+def slope_warning(profile, P_max: float) -> str | None:
+    """A warning when the contact at the largest load ``P_max`` is too large for the
+    half-space theory (slope at its edge above :data:`SLOPE_WARNING`), else None."""
+    slope_at = getattr(profile, "edge_slope", None)
+    if slope_at is None or not P_max > 0:
+        return None
+    slope = float(slope_at(P_max))
+    if not slope > SLOPE_WARNING:
+        return None
+    a = float(profile.contact_size(P_max))
+    return (f"the contact size {a:.3g} m at the largest load gives a profile slope of "
+            f"{slope:.2g} at its edge (a/R for a sphere or cylinder): the half-space theory "
+            f"assumes it small (below {SLOPE_WARNING:g}); check the radius, the moduli "
+            "(Pa) and the loads")
