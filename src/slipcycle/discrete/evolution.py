@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 
 from slipcycle.discrete.model import SEPARATED, SLIP_NEG, SLIP_POS, STICK, FrictionalSystem
-from slipcycle.discrete.rate import RateSolver
+from slipcycle.discrete.rate import RateSolver, friction_tol
 
 __all__ = ["Evolution", "PathTotals"]
 
@@ -55,7 +55,7 @@ def _scan_events(f, q, p, w, qd, pd, wd, modes, tol, disp_tol, remaining):
                 s = 1.0 if kind == 0 else -1.0
                 g = f[j] * p[j] + s * q[j]
                 gd = f[j] * pd[j] + s * qd[j]
-                thr = tol
+                thr = friction_tol(f[j], p[j], tol)   # the activity test's own
             elif kind == 2:
                 if m == SEPARATED:
                     continue
@@ -83,7 +83,11 @@ def _accumulate(modes, x, r, xd, rd, rw, dt, diss, slip_len, spos, sneg, sep, di
     for j in range(n):
         vd = xd[j]
         m = modes[j]
-        diss[j] -= (r[j] + 0.5 * dt * rd[j]) * vd * dt
+        # an open node carries q = 0 and a frictionless one q = ∓f p = 0 (contact and
+        # friction laws): their q is round-off, which booked D_j of ±1e-17 (negative D
+        # of a shakedown with a node open all cycle)
+        if m != SEPARATED and f[j] > 0.0:
+            diss[j] -= (r[j] + 0.5 * dt * rd[j]) * vd * dt
         if m == SLIP_POS or m == SLIP_NEG:
             slip_len[j] += abs(vd) * dt
         if m == SLIP_POS and vd > 0:

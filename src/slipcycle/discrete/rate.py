@@ -297,6 +297,29 @@ def _rates_kernel(K, f, modes, sysmodes, unk, state, P, Kr, rw, max_updates):
     return 0, xd, rd, nchange
 
 
+#: the largest pressure, in force tolerances, that a node at the apex of its friction
+#: cone (f p + |q| within the tolerance) may keep when it opens (:func:`_start_modes`)
+APEX_P = 1e3
+
+
+@njit(cache=True)
+def friction_tol(f, p, tol):
+    """Tolerance [N] within which node j is at a friction limit, g± = f p ± q ≤ it.
+
+    ``tol`` (the force tolerance), but for a node in contact at a real pressure,
+    p > :data:`APEX_P` × tol, at most half the width f p of its cone, so that it is
+    never at both limits at once (their slacks sum to 2 f p): with ``tol`` alone a cone
+    narrower than it (f p ≤ tol: f = 1e-9 at p = 1 N) had both limits active, which the
+    solver takes for the apex, and the node was opened with p > 0 held on it while its
+    gap grew (or, with that rule confined to p ≈ 0, no mode fitted a load lowering p).
+    Near the apex (p ≤ APEX_P × tol) and without friction (f = 0: q = 0, the two limits
+    coincide) it is ``tol``.
+    """
+    if f <= 0.0 or p <= APEX_P * tol:
+        return tol
+    return min(tol, 0.5 * f * p)
+
+
 @njit(cache=True)
 def _start_modes(f, x, r, guess, tol, disp_tol):
     """Active inequalities at the state (g+, g−, p = 0 in contact, separated), each (N,),
@@ -315,12 +338,15 @@ def _start_modes(f, x, r, guess, tol, disp_tol):
             sep[j] = True
             modes[j] = SEPARATED
             continue
-        gp[j] = f[j] * p + q <= tol
-        gm[j] = f[j] * p - q <= tol
-        # both sides of the friction limit active means f p ≤ tol: the node is at the
-        # apex, where it may open too (without that option a load that pulls it open
-        # has no rate solution)
-        p0[j] = p <= tol or (gp[j] and gm[j])
+        ftol = friction_tol(f[j], p, tol)
+        gp[j] = f[j] * p + q <= ftol
+        gm[j] = f[j] * p - q <= ftol
+        # both sides of the friction limit active means f p ≤ tol and, with
+        # friction_tol, p ≤ APEX_P tol: the node is at the apex, where it may open too
+        # (without that option a load that pulls it open has no rate solution). Not a
+        # frictionless node, whose two limits coincide (q = 0) at any p: it slips
+        # either way, and opens at p = 0
+        p0[j] = p <= tol or (f[j] > 0.0 and gp[j] and gm[j])
         m = modes[j]
         if (m == SLIP_POS and not gp[j]) or (m == SLIP_NEG and not gm[j]) or (
                 m == SEPARATED and not p0[j]):
