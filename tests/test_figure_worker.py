@@ -101,12 +101,13 @@ def test_failure_beside_the_figures_stops_the_workers_and_leaves_no_result(
                                    figures=sphere_outputs.figures,
                                    extra_files={"report.txt": failing_report})
     (tmp_path / "out").mkdir()
-    (tmp_path / "out" / "summary.json").write_text("{}\n")   # an earlier result
+    earlier = '{"metadata": {"slipcycle_version": "0"}}\n'   # an earlier result
+    (tmp_path / "out" / "summary.json").write_text(earlier)
     with pytest.raises(CaseError, match="Input/output error"):
         write_outputs(tmp_path / "out", outputs, draw=worker.draw)
     assert [p.name for p in tmp_path.iterdir()] == ["out"]
     assert [p.name for p in (tmp_path / "out").iterdir()] == ["summary.json"]
-    assert (tmp_path / "out" / "summary.json").read_text() == "{}\n"
+    assert (tmp_path / "out" / "summary.json").read_text() == earlier
 
 
 def test_figures_that_cannot_be_pickled_are_drawn_in_the_process(tmp_path, sphere_outputs,

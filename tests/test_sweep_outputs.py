@@ -121,7 +121,7 @@ def test_one_cell_sweep_gives_the_numbers_flags_and_units_of_run(name, run_cli,
             assert "steady_state" in stored
     summary = json.loads((tmp_path / "sweep" / "summary.json").read_text())
     for key, unit in summary["units"].items():
-        assert key.startswith("n_") or units.get(key) == unit, key
+        assert key.startswith(("n_", "axes.")) or units.get(key) == unit, key
 
 
 def test_converged_halfspace_cells_are_not_stored_as_failed(run_cli, write_case, tmp_path):

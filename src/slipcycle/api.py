@@ -19,6 +19,7 @@ import json
 import math
 import os
 import re
+import tomllib
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -124,11 +125,15 @@ def as_case(case: Any, overrides: Mapping[str, Any] | None = None) -> Case:
     case : path, str, dict or Case
         See :func:`run`.
     overrides : mapping, optional
-        Dotted keys -> values (:func:`apply_overrides`); the case text is kept as given.
+        Dotted keys -> values (:func:`apply_overrides`), each taken as the case file
+        would give it (NumPy values as TOML's numbers and lists).
 
     Returns
     -------
     Case
+        With overrides, its ``text`` is the overridden document (a first comment line
+        names the case and the overrides): what a study re-reads and what the outputs
+        record as the case run.
 
     Raises
     ------
@@ -156,8 +161,13 @@ def as_case(case: Any, overrides: Mapping[str, Any] | None = None) -> Case:
     if not overrides:
         return base
     data = apply_overrides(base.data, dict(overrides))
-    return Case(model=data.get("model", base.model), data=data, text=base.text,
-                path=base.path)
+    # the text is what was run: the studies re-read a case from its text (their worker
+    # tasks get text, not dicts), and the provenance of every output records it
+    where = f" {json.dumps(str(base.path), ensure_ascii=False)}" if base.path else ""
+    head = f"# the case{where} with " + ", ".join(
+        f"{k} = {_value(_as_toml(k, v))}" for k, v in overrides.items())
+    return Case(model=data.get("model", base.model), data=data,
+                text=" ".join(head.splitlines()) + "\n" + toml_text(data), path=base.path)
 
 
 def apply_overrides(data: dict, params: dict) -> dict:
@@ -181,6 +191,7 @@ def apply_overrides(data: dict, params: dict) -> dict:
     """
     data = copy.deepcopy(data)
     for key, value in params.items():
+        value = _as_toml(key, value)
         parts = key.split(".")
         node = data
         for i, part in enumerate(parts):
@@ -209,6 +220,22 @@ def apply_overrides(data: dict, params: dict) -> dict:
                 child = child[int(idx)]
             node = child
     return data
+
+
+def _as_toml(key: str, value: Any) -> Any:
+    """``value`` as the TOML parser gives it back from its text: an override reaches the
+    model exactly as the same value written in the case file would (NumPy scalars and
+    arrays, tuples and paths become TOML's int, float, list and string; NumPy's int64 is
+    no Python int, and a reader would refuse it). A value TOML cannot hold (None, a set)
+    is refused naming ``key``."""
+    try:
+        text = f"v = {_value(value)}\n"
+    except CaseError as exc:
+        raise CaseError(key, exc.problem) from None
+    try:
+        return tomllib.loads(text)["v"]
+    except (tomllib.TOMLDecodeError, RecursionError):
+        raise CaseError(key, f"cannot write {value!r} as a TOML value") from None
 
 
 # -- a case document as TOML text (the provenance of a case given as a dict) --------------

@@ -93,7 +93,10 @@ def write_report(out: Path, cases: Mapping[str, tuple[str, str]] | None = None, 
                  name, s.get("dissipation_per_cycle"), unit, dt)
         if progress is not None:
             progress(i, len(cases) + 1)
-        keys = [k for k in ("steady_state", "dissipation_per_cycle", "cycles_run",
+        # steady_state_class: the class in the words every model shares (a rods summary
+        # has no steady_state of its own)
+        keys = [k for k in ("steady_state", "steady_state_class", "dissipation_per_cycle",
+                            "cycles_run",
                             "permanent_stick_size", "W_hat", "slipping_nodes", "f_crit",
                             "omega1", "torque_ratio", "dissipation_per_cycle_qs",
                             "protocols", "protocol_dissipation_per_cycle",

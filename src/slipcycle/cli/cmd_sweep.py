@@ -10,8 +10,9 @@ and ``DIR/result.nc`` (an xarray Dataset over the sweep axes) are written.
 
 Any model works: a halfspace case with ``--set loading.Q1=… --set loading.phase=…`` gives
 a Ŵ map through the same machinery. Categorical entries (``steady_state``) are stored as
-integer codes with CF ``flag_values``/``flag_meanings``, and every entry carries the
-``units`` the model gives in its summary.
+integer codes with CF ``flag_values``/``flag_meanings``, every entry carries the
+``units`` the model gives in its summary, and every axis is a coordinate with the unit of
+its case key (``loading_Q1`` in N; ``loading.p1[0]`` becomes ``loading_p1_0``).
 
 One sweep at a time may use a store: a second one on the same ``--out`` stops at once.
 Ctrl-C stops a sweep at once (exit code 130) with every finished run stored, and says how

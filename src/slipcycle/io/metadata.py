@@ -112,9 +112,18 @@ def provenance(case_text: str | None, case_path: Path | str | None = None) -> di
     -------
     dict
         ``slipcycle_version``, ``versions`` (package -> version), ``platform``,
-        ``command_line``, ``case_file``, ``case``, ``created`` (ISO 8601, UTC) and
+        ``command_line``, ``case_file``, ``case``, ``case_sha256`` (SHA-256 of the case
+        text as UTF-8, ``""`` without one), ``created`` (ISO 8601, UTC) and
         ``units_system``.
+
+    Notes
+    -----
+    ``summary.json`` keeps every entry but the case text itself, so ``case_sha256`` is
+    what ties a summary to its case when no file was named (a case run from Python, the
+    demo) or the file has changed since.
     """
+    import hashlib
+
     return {
         "slipcycle_version": __version__,
         "versions": dict(versions()),
@@ -122,6 +131,8 @@ def provenance(case_text: str | None, case_path: Path | str | None = None) -> di
         "command_line": command_line(),
         "case_file": str(case_path) if case_path else "",
         "case": case_text or "",
+        "case_sha256": hashlib.sha256(case_text.encode("utf-8", "surrogatepass")).hexdigest()
+        if case_text else "",
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "units_system": "SI (N, m, Pa, J, rad, s)",
     }

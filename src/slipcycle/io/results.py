@@ -468,18 +468,80 @@ def _check_parent_writable(path: Path) -> None:
         raise CaseError(str(path), f"cannot be created: no permission to write in {anchor}")
 
 
+def _check_not_in_package(path: Path) -> None:
+    """Refuse an output inside the installed slipcycle package (its example cases and
+    code): results written there would change, or be lost with, the installation."""
+    from slipcycle.io.files import resolved
+
+    package = resolved(Path(__file__).resolve().parents[1])
+    target = resolved(path)
+    if target == package or package in target.parents:
+        raise CaseError(str(path), f"is inside the installed slipcycle package ({package}); "
+                        "write results to a folder of your own (slipcycle examples --copy "
+                        "DIR copies the example cases out)")
+
+
+def _is_slipcycle_summary(path: Path) -> bool:
+    """Whether ``path`` is a ``summary.json`` written by slipcycle (its provenance names
+    the slipcycle version)."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return False
+    meta = data.get("metadata") if isinstance(data, dict) else None
+    return isinstance(meta, dict) and "slipcycle_version" in meta
+
+
+#: entries of a result directory that a write replaces: files by name, folders whole
+_REPLACED_FILES, _REPLACED_DIRS = ("summary.json", "result.nc"), ("figures", "fields")
+
+
+def _check_replaceable(path: Path) -> None:
+    """Refuse a result directory whose entries of the result names belong to the user.
+
+    A write replaces ``summary.json`` and ``result.nc`` and the folders ``figures/`` and
+    ``fields/`` whole (:func:`_commit`); that is only safe where they are an earlier
+    slipcycle result, i.e. where ``summary.json`` was written by slipcycle. Otherwise such
+    an entry (a user's own ``figures/`` folder of drawings, a ``summary.json`` of another
+    tool, a folder named ``result.nc``) would be deleted without a word.
+    """
+    summary = path / "summary.json"
+    if summary.is_file() and not summary.is_symlink() and _is_slipcycle_summary(summary):
+        return
+    for name in (*_REPLACED_FILES, *_REPLACED_DIRS):
+        entry = path / name
+        if not (entry.exists() or entry.is_symlink()):
+            continue
+        if name in _REPLACED_DIRS and entry.is_dir() and not entry.is_symlink():
+            try:
+                if not any(entry.iterdir()):
+                    continue                      # an empty folder holds nothing to lose
+            except OSError:
+                pass
+        what = (f"a {name} that slipcycle did not write" if name == "summary.json" else
+                f"{'the folder ' if entry.is_dir() else ''}{name} but no summary.json "
+                "written by slipcycle (so no earlier result)")
+        raise CaseError(str(path), f"holds {what}; the results would replace it: move it "
+                        "or choose another --out")
+
+
 def check_output_dir(path: str | Path) -> None:
     """Refuse, before any work, an output directory that cannot be written.
 
-    Raises :class:`~slipcycle.io.CaseError` naming the path when it is an existing file, or
-    when neither it nor its nearest existing parent can be written.
+    Raises :class:`~slipcycle.io.CaseError` naming the path when it is an existing file,
+    when neither it nor its nearest existing parent can be written, when it lies inside
+    the installed slipcycle package, or when it holds entries of the result names
+    (``summary.json``, ``result.nc``, ``figures/``, ``fields/``) that are not an earlier
+    slipcycle result (:func:`_check_replaceable`).
     """
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise CaseError(str(path), "exists and is not a directory; choose another --out")
+    _check_not_in_package(path)
     if path.is_dir():
         if not os.access(path, os.W_OK | os.X_OK):
             raise CaseError(str(path), "no permission to write in this directory")
+        _check_replaceable(path)
         return
     _check_parent_writable(path)
 
@@ -488,6 +550,7 @@ def check_output_file(path: str | Path) -> None:
     """Refuse, before any work, an output file that cannot be written (see
     :func:`check_output_dir`)."""
     path = Path(path)
+    _check_not_in_package(path)
     if path.is_dir():
         raise CaseError(str(path), "is a directory; give a file name")
     if path.exists():

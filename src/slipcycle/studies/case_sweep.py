@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from slipcycle import registry
-from slipcycle.api import apply_overrides, run
+from slipcycle.api import apply_overrides, as_case, run
 from slipcycle.errors import InputError, SolverError
 from slipcycle.io import Case, CaseError, RunOutputs
 from slipcycle.io.case import parse_case_text
@@ -90,10 +90,10 @@ def parse_set(items: list[str]) -> list[Axis]:
 
 
 def _case_with(case_text: str, case_path, params: dict) -> Case:
+    """The case of one cell: the same override path as ``slipcycle.run(case, params)``
+    (:func:`slipcycle.api.as_case`), so a cell is the case file edited to its values."""
     base = parse_case_text(case_text, Path(case_path) if case_path else None)
-    data = apply_overrides(base.data, params)
-    return Case(model=data.get("model", base.model), data=data, text=case_text,
-                path=base.path)
+    return as_case(base, params)
 
 
 def validate_cells(case_text: str, case_path, axes: list[Axis], max_checked: int = 256
@@ -228,6 +228,47 @@ def make_task(case_text: str, case_path):
                    case_path=str(case_path) if case_path else None)
 
 
+#: the unit of a case key by its last name (the same meaning in every model; SPEC §6,
+#: README, docs/*.md): a sweep axis is a coordinate of ``result.nc`` and needs its unit
+_KEY_UNITS = {
+    **dict.fromkeys(("friction", "nu", "lam", "compliance_ratio", "frequency_ratio",
+                     "damping_ratio", "grading", "rtol", "steady_tol", "difference_tol",
+                     "step_tolerance", "lam_tol", "exponent", "iwan_chi", "iwan_beta",
+                     "amplitude_ratio"), "1"),
+    **dict.fromkeys(("cycles", "steps_per_cycle", "sliders", "modes", "rings", "elements",
+                     "refine", "bolt_count", "bem_grid", "assembly_steps", "lam_points",
+                     "f_crit_exact_max_nodes"), "1"),
+    **dict.fromkeys(("E", "bolt_modulus", "contact_modulus"), "Pa"),
+    **dict.fromkeys(("radius", "L", "height", "width", "thickness", "contact_width",
+                     "gamma_sigma", "bolt_diameter", "washer_diameter", "mesh_size",
+                     "overlap", "plate_length", "plate_width", "end_relief",
+                     "end_relief_depth", "reference_depth", "coordinates", "initial_slip",
+                     "U0", "U1", "V0", "V1"), "m"),
+    **dict.fromkeys(("phase", "p1_phase", "q1_phase", "P1_phase", "rotation_amplitude"),
+                    "rad"),
+    **dict.fromkeys(("p0", "q0", "p1", "q1", "axial_force", "preload",
+                     "service_amplitude"), "N"),
+    **dict.fromkeys(("A", "B", "C"), "N/m"),
+    "density": "kg m-3", "area": "m2", "nominal_area": "m2", "interface_stiffness": "N m-3",
+}
+
+
+def axis_units(case: Case, key: str) -> str | None:
+    """The unit of the case key ``key`` (a sweep axis, ``loading.Q1``, ``loading.p1[0]``),
+    or None where slipcycle does not know it (then none is written: no unit is guessed).
+
+    The half-space loads of a plane contact (``profile = "cylinder"``) are line loads
+    [N/m], as in its summary.
+    """
+    m = _KEY.match(key.split(".")[-1])
+    name = m.group(1) if m else ""
+    if case.model == "halfspace" and name in ("P0", "P1", "Q0", "Q1"):
+        table = case.data.get("halfspace")
+        plane = isinstance(table, Mapping) and table.get("profile") == "cylinder"
+        return "N/m" if plane else "N"
+    return _KEY_UNITS.get(name)
+
+
 def sweep_outputs(case: Case, store: SweepStore, axes: list[Axis], store_path) -> RunOutputs:
     """Summary and Dataset of a finished case sweep.
 
@@ -238,10 +279,16 @@ def sweep_outputs(case: Case, store: SweepStore, axes: list[Axis], store_path) -
         ``runs``, ``failed_runs`` (runs stopped by an input or solver error) and
         ``first_failure`` (the message of the first in grid order, with its values, or
         None), ``store``, ``outputs`` (names), ``flags`` and ``units`` of the stored
-        outputs, ``dissipation_per_cycle`` ({min, max} over the cells [J], or None);
-        ``dataset``: :func:`~slipcycle.sweep.dataset.store_dataset`.
+        outputs and of the axes (``axes.<key>``, :func:`axis_units`),
+        ``dissipation_per_cycle`` ({min, max} over the cells [J], or None);
+        ``dataset``: :func:`~slipcycle.sweep.dataset.store_dataset`, each axis coordinate
+        with its unit.
     """
     ds = store_dataset(store, axes)
+    axis_unit = {a.name: axis_units(case, a.name) for a in axes}
+    for a, dim in zip(axes, ds["done"].dims, strict=True):
+        if axis_unit[a.name] is not None:   # an integer axis would otherwise read as "1"
+            ds[dim].attrs["units"] = axis_unit[a.name]
     data = store.read()
     described = store.output_attrs
     errors = data.get(ERROR, np.full(store.shape, ""))
@@ -257,7 +304,8 @@ def sweep_outputs(case: Case, store: SweepStore, axes: list[Axis], store_path) -
                "outputs": sorted(data),
                "flags": {k: v["flag_meanings"].split() for k, v in described.items()
                          if "flag_meanings" in v},
-               "units": {k: v["units"] for k, v in described.items() if "units" in v}}
+               "units": {**{k: v["units"] for k, v in described.items() if "units" in v},
+                         **{f"axes.{k}": u for k, u in axis_unit.items() if u is not None}}}
     d = data.get("dissipation_per_cycle")
     if d is not None and d.dtype.kind == "f" and np.isfinite(d).any():
         summary["dissipation_per_cycle"] = {"min": float(np.nanmin(d)),

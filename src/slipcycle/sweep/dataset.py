@@ -7,6 +7,7 @@ basin maps and λ scans), so that their stored outputs read back the same way.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -15,7 +16,7 @@ import numpy as np
 from slipcycle.io import CaseError, RunOutputs
 from slipcycle.sweep.core import Axis, SweepError, SweepStore
 
-__all__ = ["store_dataset", "as_case_error", "StudyStatus"]
+__all__ = ["store_dataset", "axis_dim", "as_case_error", "StudyStatus"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,14 @@ def as_case_error(exc: SweepError) -> CaseError:
     return CaseError(exc.key, exc.problem)
 
 
+def axis_dim(name: str) -> str:
+    """The dimension (and coordinate variable) name of the sweep axis ``name``: a CF
+    variable name (letters, digits, underscores; CF §2.3), so ``loading.lam`` ->
+    ``loading_lam`` and an entry of a list, ``loading.p1[0]``, -> ``loading_p1_0``
+    (brackets made the name of the written coordinate invalid)."""
+    return re.sub(r"_+$", "", re.sub(r"[^A-Za-z0-9_]", "_", name)) or "axis"
+
+
 def store_dataset(store: SweepStore, axes: Sequence[Axis], dims: Sequence[str] | None = None,
                   attrs: Mapping[str, Mapping] | None = None):
     """The outputs of a sweep store as an xarray Dataset.
@@ -59,7 +68,7 @@ def store_dataset(store: SweepStore, axes: Sequence[Axis], dims: Sequence[str] |
     axes : sequence of Axis
         The sweep axes, in store order.
     dims : sequence of str, optional
-        One dimension name per axis (default: the axis name with dots as underscores).
+        One dimension name per axis (default: :func:`axis_dim` of the axis name).
         Per-cell vectors get a further dimension, ``node`` for ``dissipation_per_node``
         and ``initial_slip``, ``<name>_dim<k>`` otherwise.
     attrs : mapping, optional
@@ -78,7 +87,7 @@ def store_dataset(store: SweepStore, axes: Sequence[Axis], dims: Sequence[str] |
     described = store.output_attrs
     for name, extra in (attrs or {}).items():
         described[name] = {**described.get(name, {}), **extra}
-    dims = list(dims or [a.name.replace(".", "_") for a in axes])
+    dims = list(dims or [axis_dim(a.name) for a in axes])
     coords = {}
     for d, a in zip(dims, axes, strict=True):
         coords[d] = (d, np.asarray(a.values), {"long_name": a.name})
