@@ -441,3 +441,36 @@ def test_every_figure_of_these_runs_lies_inside_its_canvas(request, run):
         width, height = fig.get_size_inches()
         assert box.x0 >= -0.01 and box.y0 >= -0.01, name
         assert box.x1 <= width + 0.01 and box.y1 <= height + 0.01, name
+
+
+ONE_NODE_3D = """
+model = "discrete3d"
+[discrete3d]
+A = [[2.0, 0.0], [0.0, 2.0]]
+B = [[0.0, 0.0]]
+C = [[2.0]]
+friction = 0.4
+coordinates = [[0.0, 0.0, 0.0]]
+[loading]
+p0 = [1.0]
+q1 = [[0.6, 0.6]]
+q1_phase = [[0.0, -1.5707963]]
+[run]
+cycles = 10
+steps_per_cycle = 40
+"""
+
+
+def test_one_node_3d_figures_draw_silently_with_quiet(tmp_path, run_cli):
+    """A single node at the origin: its slip-direction arrows were scaled by the data
+    extent (zero), and matplotlib printed a RuntimeWarning under -q."""
+    import warnings
+
+    case = tmp_path / "one.toml"
+    case.write_text(ONE_NODE_3D)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code, out, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    assert code == 0 and out == "" and err == ""
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    assert (tmp_path / "out" / "figures" / "slip_directions.png").is_file()

@@ -117,7 +117,9 @@ def slip_directions(ds, instants=None):
         ax.scatter(x, y, c=states[k], cmap=cmap, vmin=-0.5, vmax=2.5, s=10,
                    edgecolors="none")
         if np.any(m):
-            ax.quiver(x[m], y[m], dv[m, 0] / norm[m], dv[m, 1] / norm[m], angles="xy",
+            # angles "uv" (the axes are equal-aspect, so the same directions as "xy"):
+            # "xy" divides by the data extent, zero for one node at the origin
+            ax.quiver(x[m], y[m], dv[m, 0] / norm[m], dv[m, 1] / norm[m], angles="uv",
                       color="k", width=0.006)
         ax.set_title(f"θ = {theta[k]:.2f} rad")
         ax.set_xlabel("x [m]")
