@@ -53,6 +53,12 @@ def test_every_interface_runs_with_slip(run_cli, write_case, tmp_path, interface
     else:
         assert s["dissipation_per_cycle"] > 0.0
         assert s["T_dyn_max"] <= s["gross_slip_torque"] * (1 + 1e-9)
+    # result.nc answers the headline numbers too, in J
+    import xarray as xr
+
+    with xr.open_dataset(tmp_path / "o" / "result.nc") as ds:
+        for key in ("dissipation_per_cycle", "dissipation_per_cycle_qs"):
+            assert float(ds[key]) == s[key] and ds[key].attrs["units"] == "J"
 
 
 @pytest.mark.parametrize("edit, key", [

@@ -24,6 +24,7 @@ import numpy as np
 
 from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, RunOutputs, Section
+from slipcycle.io.case import read_friction
 from slipcycle.io.sizes import MEMORY_LIMIT, check_memory, memory_limit
 from slipcycle.result import STEADY_STATES, RunResult, classify
 from slipcycle.rods.model import INTERFACES, Excitation, Rod, TwoRods
@@ -137,7 +138,7 @@ def parse_case(case: Case, *, finish: bool = True, limits: bool = False) -> Rods
     E = sec.array("E", shape=(2,), gt=0.0)
     nu = sec.array("nu", shape=(2,), gt=-1.0, le=0.5)
     rho = sec.array("density", shape=(2,), gt=0.0)
-    f = sec.float("friction", ge=0.0)
+    f = read_friction(sec, ge=0.0)
     iface = sec.string("interface", "distributed", choices=INTERFACES)
     kt = sec.float("interface_stiffness", None, gt=0.0)
     if kt is None and iface in ("distributed", "jenkins", "iwan"):
@@ -521,8 +522,9 @@ class RodsResult(RunResult):
         return self.with_shared(summary)
 
     def _build_dataset(self):
-        """Dynamic and quasi-static loops over the last cycle (dimension ``time``) and,
-        with the regularisation study, its amplitude sweep (units on every variable)."""
+        """Dynamic and quasi-static loops over the last cycle (dimension ``time``), their
+        dissipation per cycle and, with the regularisation study, its amplitude sweep
+        (units on every variable)."""
         import xarray as xr
 
         dyn, qs, reg = self.analysis["dyn"], self.analysis["qs"], self.analysis["reg"]
@@ -535,7 +537,12 @@ class RodsResult(RunResult):
              "N": ("time", dyn.N, {"units": "N", "long_name": "normal force (closed contact)"}),
              "T_qs": ("time", qs.T, {"units": "N m",
                                      "long_name": "interface torque, quasi-static"}),
-             "delta_qs": ("time", qs.delta, {"units": "rad"})},
+             "delta_qs": ("time", qs.delta, {"units": "rad"}),
+             # the headline numbers of the summary, so that the file alone answers them
+             "dissipation_per_cycle": ((), dyn.dissipation, {
+                 "units": "J", "long_name": "interface dissipation per cycle, dynamic"}),
+             "dissipation_per_cycle_qs": ((), qs.dissipation, {
+                 "units": "J", "long_name": "interface dissipation per cycle, quasi-static"})},
             coords={"time": ("time", dyn.t, tatt)})
         if reg is not None:
             sweep = reg.to_dataset()  # the study's own Dataset: amplitude, reg_T_*, reg_D_*
