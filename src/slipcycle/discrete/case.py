@@ -29,6 +29,8 @@ from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, CaseError, RunOutputs, Section
 from slipcycle.io.case import case_error_of
 from slipcycle.io.loads import (
+    check_load_scale,
+    check_run,
     check_some_contact,
     load_cases,
     periodic_load,
@@ -142,23 +144,6 @@ def _initial_state_error(sec: Section, ld: Section, exc, r0: np.ndarray, n: int)
 _SYSTEM_KEYS = ("A", "B", "C", "friction", "accept_ill_posed", "f_crit_exact_max_nodes")
 
 
-#: fewest load samples per cycle: below, a cycle cannot resolve a harmonic load (one
-#: sample sees a constant load: shakedown with D = 0 whatever the loads); the
-#: ``[fe.discrete]`` table that writes discrete cases has the same floor
-MIN_STEPS_PER_CYCLE = 4
-
-
-def _check_run(rn: Section, run: RunSettings) -> None:
-    """Refuse ``[run]`` settings that cannot give a meaningful cycle, naming the key."""
-    if run.steps_per_cycle < MIN_STEPS_PER_CYCLE:
-        raise rn.error("steps_per_cycle", f"must be >= {MIN_STEPS_PER_CYCLE} (load samples "
-                       f"per cycle; fewer cannot follow a periodic load), got "
-                       f"{run.steps_per_cycle}")
-    if run.min_cycles > run.cycles:
-        raise rn.error("min_cycles", f"must be <= cycles ({run.cycles}): the run stops after "
-                       f"{run.cycles} cycles, got {run.min_cycles}")
-
-
 def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     """Read and validate every key of a discrete case; no computation beyond checks.
 
@@ -202,7 +187,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
                         load_cases(ld, n, lam, 1, file_case))
     rn = case.section("run", required=False)
     run = RunSettings(**run_settings(rn))
-    _check_run(rn, run)
+    check_run(rn, run)
     case.finish()
 
     # -- sizes: refuse what cannot be allocated, before any work --------------------------
@@ -224,7 +209,10 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     except ModelError as exc:
         raise case_error_of(exc, {**{k: sec.key(k) for k in _SYSTEM_KEYS}, **mkeys}) from None
     fc = system.critical_friction
-    check_some_contact(ld, load.cycle_samples(run.steps_per_cycle)[1][:, -n:])
+    samples = load.cycle_samples(run.steps_per_cycle)[1]
+    check_load_scale(ld, samples if protocol is None else np.vstack([samples, protocol]),
+                     system.stiffness_scale())
+    check_some_contact(ld, samples[:, -n:])
     if init is not None:
         r0 = load(np.array([0.0]))[0]
         F = max(float(np.max(np.abs(load.cycle_samples(run.steps_per_cycle)[1]))), 1e-300)

@@ -31,6 +31,8 @@ from slipcycle.figure_task import figure_task
 from slipcycle.io import Case, RunOutputs, Section
 from slipcycle.io.case import case_error_of
 from slipcycle.io.loads import (
+    check_load_scale,
+    check_run,
     check_some_contact,
     load_cases,
     periodic_load,
@@ -130,6 +132,24 @@ def assembly_states(steps, load: Load3D) -> np.ndarray:
     return step_states(steps, r0[:2 * n].reshape(n, 2), r0[2 * n:])
 
 
+def _check_sizes(sec: Section, rn: Section, n: int, run: RunSettings) -> None:
+    """Refuse a model or a run whose memory exceeds the budget, before any work.
+
+    A 3-D node has three degrees of freedom: the estimates of the 2-D model
+    (:mod:`slipcycle.discrete.sizes`, two per node) are taken for 2N nodes, an upper bound.
+    The key blamed is the one the user set (both appear in the message).
+    """
+    from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
+
+    check_memory(sec.key("stiffness_file" if sec.has("stiffness_file") else "C"),
+                 system_bytes(2 * n), f"{n} contact nodes")
+    steps, cyc = run.steps_per_cycle, run.cycles
+    key = "cycles" if rn.has("cycles") and not rn.has("steps_per_cycle") else "steps_per_cycle"
+    check_memory(rn.key(key), run_bytes(2 * n, steps, cyc, True),
+                 f"{steps:g} steps per cycle × up to {cyc:g} cycles ({n} nodes, every cycle "
+                 "recorded)")
+
+
 def read_discrete3d_case(case: Case) -> Discrete3DCase:
     """Read and validate every key of a ``discrete3d`` case; no computation beyond checks.
 
@@ -176,6 +196,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
     rn = case.section("run", required=False)
     run = RunSettings(**run_settings(rn, step_tol=("step_tolerance", step_tolerance),
                                      replay=("replay", lambda s, k: s.bool(k, False))))
+    check_run(rn, run)
     out = case.section("output", required=False)
     fields = out.raw("fields", list(FIELD_FORMATS))
     if isinstance(fields, str):
@@ -184,6 +205,7 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
         raise out.error("fields", f"must be a list of {', '.join(FIELD_FORMATS)} (or [] for "
                                   f"no field files), got {fields!r}")
     case.finish()
+    _check_sizes(sec, rn, n, run)
 
     try:
         system = FrictionalSystem3D(mats["A"], mats["B"], mats["C"], friction,
@@ -194,7 +216,10 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
         keys = {**{k: sec.key(k) for k in ("friction", "accept_ill_posed", "coordinates",
                                            "area")}, **mkeys}
         raise case_error_of(exc, keys) from None
-    check_some_contact(ld, load.cycle_samples(run.steps_per_cycle)[1][:, -n:])
+    samples = load.cycle_samples(run.steps_per_cycle)[1]
+    check_load_scale(ld, samples if protocol is None else np.vstack([samples, protocol]),
+                     system.stiffness_scale())
+    check_some_contact(ld, samples[:, -n:])
     if steps is not None:
         try:
             protocol = assembly_states(steps, load)

@@ -51,6 +51,7 @@ from slipcycle.halfspace.topography import (
     topography_profile,
 )
 from slipcycle.io import Case, CaseError, RunOutputs, Section
+from slipcycle.io.case import read_friction
 from slipcycle.io.sizes import check_memory as check
 from slipcycle.io.sizes import memory_limit
 from slipcycle.loading import TabulatedLoad
@@ -247,7 +248,7 @@ def parse_case(case: Case) -> HalfspaceModel:
         if users:
             raise sec.error(key, f"not used by profile = {name!r} (only by "
                             f"{', '.join(users)})")
-    friction = sec.float("friction")
+    friction = read_friction(sec)
     normal, tangential, ncontrol, tcontrol, protocol = _loading(case.section("loading"))
     run = case.section("run", required=False)
     steps = run.int("steps_per_cycle", _DEFAULT_STEPS)
@@ -259,7 +260,7 @@ def parse_case(case: Case) -> HalfspaceModel:
         max_cycles=run.int("cycles", 5, le=10000),
         n_sliders=run.int("sliders", _DEFAULT_SLIDERS),
         assembly_steps=run.int("assembly_steps", max(steps // 4, 10)),
-        snapshots=np.atleast_1d(run.array("snapshots", [0.0, np.pi / 2, np.pi, 1.5 * np.pi])),
+        snapshots=run.values("snapshots", [0.0, np.pi / 2, np.pi, 1.5 * np.pi]),
         steady_tol=run.float("steady_tol", 1e-9),
         profile_name=name,
     )

@@ -219,6 +219,23 @@ class Section:
         _check_bounds(self, key, arr, gt, ge, lt, le)
         return arr
 
+    def values(self, key: str, default: Any = _MISSING, *, gt: float | None = None,
+               ge: float | None = None, lt: float | None = None,
+               le: float | None = None) -> np.ndarray:
+        """A number or a flat list of numbers, as a 1-D float array (bounds on each).
+
+        A nested list is refused: its rows would otherwise be read one after another as
+        if they were one list (``[[0.2, 0.4]]`` is not a list of values).
+        """
+        raw = self._get(key, default)
+        arr = self.coerce_array(key, raw, gt=gt, ge=ge, lt=lt, le=le)
+        if arr is None:
+            return None  # type: ignore[return-value]
+        if arr.ndim > 1:
+            raise self.error(key, "must be a number or a flat list of numbers, got a nested "
+                                  f"list (shape {'×'.join(map(str, arr.shape))})")
+        return np.atleast_1d(arr)
+
     def grid(self, key: str, default: dict, *, gt: float | None = None,
              ge: float | None = None, le: float | None = None, geometric: bool = False,
              max_num: int = 100_000) -> np.ndarray:
@@ -226,7 +243,7 @@ class Section:
 
         The table form gives ``num`` values from ``start`` to ``stop`` inclusive, equally
         spaced (or geometrically, with ``geometric``); bounds apply to every value; an
-        empty list is refused.
+        empty or nested list is refused.
         """
         raw = self.data.get(key, default)
         if isinstance(raw, dict):
@@ -238,7 +255,7 @@ class Section:
             n = sub.int("num", ge=1, le=max_num)
             sub.finish()
             return np.geomspace(a, b, n) if geometric else np.linspace(a, b, n)
-        values = np.atleast_1d(self.array(key, gt=gt, ge=ge, le=le)).ravel()
+        values = self.values(key, gt=gt, ge=ge, le=le)
         if values.size == 0:   # a grid of no points: a study with nothing to compute
             raise self.error(key, "must hold at least one value, got an empty list")
         return values
@@ -438,6 +455,23 @@ def case_error_of(exc, keys) -> CaseError:
         toml_value = str(value).lower() if isinstance(value, bool) else repr(value)
         problem = f"{exc.detail}. Set {keys.get(field, field)} = {toml_value} to {purpose}"
     return CaseError(keys.get(exc.name, exc.name), problem)
+
+
+#: largest accepted coefficient of friction: real ones are of order 1, and far above this
+#: (1e100 in the rods' Iwan fit, 1.3e154 squared in Ŵ = W/(λ_c γσ f² P0)) the models'
+#: arithmetic overflows; a value this large is a typing or unit mistake
+MAX_FRICTION = 1e12
+
+
+def read_friction(sec: Section, key: str = "friction", **bounds) -> float:
+    """A coefficient of friction (one number): finite, within ``bounds`` and at most
+    :data:`MAX_FRICTION`, which is refused naming the key."""
+    f = sec.float(key, **bounds)
+    if f is not None and f > MAX_FRICTION:
+        raise sec.error(key, f"must be <= {MAX_FRICTION:g}, got {f:g}: a coefficient of "
+                             "friction is of order 1; one this large is a typing or unit "
+                             "mistake, and the models' friction forces would overflow")
+    return f
 
 
 def read_steady_tol(sec: Section, default: float) -> float:

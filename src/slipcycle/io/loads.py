@@ -12,7 +12,8 @@ from slipcycle.loading import HarmonicLoad, TabulatedLoad
 from slipcycle.loading.nodal import LoadCase
 
 __all__ = ["time_function", "node_vector", "periodic_load", "protocol_states", "load_cases",
-           "run_settings", "check_some_contact", "step_tolerance"]
+           "run_settings", "check_run", "check_some_contact", "check_load_scale",
+           "step_tolerance", "MIN_STEPS_PER_CYCLE", "MAX_ENERGY_SCALE"]
 
 #: smallest accepted relative step tolerance: the state is known to about 1e-16 relative,
 #: and the steps' error estimate to some 1e6 times that after the Newton solves, so a step
@@ -163,6 +164,87 @@ def run_settings(rn: Section, **extra) -> dict:
     for name, (key, reader) in extra.items():
         run[name] = reader(rn, key)
     return run
+
+
+#: fewest load samples per cycle: below, a cycle cannot resolve a harmonic load (one
+#: sample sees a constant load: shakedown with D = 0 whatever the loads); the
+#: ``[fe.discrete]`` table that writes discrete cases has the same floor
+MIN_STEPS_PER_CYCLE = 4
+
+
+def check_run(rn: Section, run) -> None:
+    """Refuse ``[run]`` settings of a discrete model (2-D or 3-D) that cannot give a
+    meaningful cycle, naming the key.
+
+    Parameters
+    ----------
+    rn : Section
+        The ``[run]`` table.
+    run : RunSettings
+        Its settings (:func:`run_settings`).
+
+    Raises
+    ------
+    CaseError
+        ``steps_per_cycle`` below :data:`MIN_STEPS_PER_CYCLE`, or ``min_cycles`` above
+        ``cycles`` (the run would stop at ``cycles`` and call a steady cycle
+        "not converged").
+    """
+    if run.steps_per_cycle < MIN_STEPS_PER_CYCLE:
+        raise rn.error("steps_per_cycle", f"must be >= {MIN_STEPS_PER_CYCLE} (load samples "
+                       f"per cycle; fewer cannot follow a periodic load), got "
+                       f"{run.steps_per_cycle}")
+    if run.min_cycles > run.cycles:
+        raise rn.error("min_cycles", f"must be <= cycles ({run.cycles}): the run stops after "
+                       f"{run.cycles} cycles, got {run.min_cycles}")
+
+
+#: largest elastic energy scale F²/k [J] a discrete model is computed with: the engines
+#: form energies (work of the loads, dissipation, their step-error estimates) as products
+#: of forces and displacements of this size, and a double overflows at 1.8e308
+MAX_ENERGY_SCALE = 1e300
+
+#: the ``[loading]`` keys that set the size of the loads (the largest is blamed)
+_LOAD_KEYS = ("p0", "q0", "p1", "q1", "p_table", "q_table", "lam")
+
+
+def check_load_scale(ld: Section, samples: np.ndarray, stiffness: float) -> None:
+    """Refuse loads whose elastic energy cannot be represented in double precision.
+
+    Parameters
+    ----------
+    ld : Section
+        The ``[loading]`` table.
+    samples : numpy.ndarray
+        The loads [q^w, p^w] [N] at the samples of a cycle (and of the protocol).
+    stiffness : float
+        The largest diagonal entry of the reduced stiffness K [N/m].
+
+    Raises
+    ------
+    CaseError
+        When F²/k exceeds :data:`MAX_ENERGY_SCALE` (F the largest load): a run would meet
+        overflow (inf, nan) in its energies. Blames the ``[loading]`` key holding the
+        largest number (``lam`` when the factor is the big one).
+    """
+    force = float(np.max(np.abs(samples), initial=0.0))
+    energy = force * (force / stiffness) if stiffness > 0 else 0.0
+    if not energy > MAX_ENERGY_SCALE:   # also false for nan: that is refused elsewhere
+        return
+
+    def size(key: str) -> float:
+        try:
+            return float(np.max(np.abs(np.asarray(ld.data[key], float)), initial=0.0))
+        except (TypeError, ValueError):
+            return 0.0
+
+    given = [k for k in _LOAD_KEYS if ld.has(k)]
+    key = max(given, key=size) if given else "load_case"
+    size_text = f"about {energy:.3g} J" if np.isfinite(energy) else "over 1.8e308 J"
+    raise ld.error(key, f"loads up to {force:.3g} N on a stiffness of {stiffness:.3g} N/m "
+                        f"store an elastic energy F²/k of {size_text}, beyond what double "
+                        f"precision can compute with ({MAX_ENERGY_SCALE:g} J at most): check "
+                        "the units of the loads")
 
 
 def time_function(sec: Section, lam: float) -> HarmonicLoad | TabulatedLoad:

@@ -105,7 +105,7 @@ def parse_map_case(case):
     ph = sec.grid("phase", {"start": -np.pi, "stop": np.pi, "num": 37}, ge=-2 * np.pi,
                   le=2 * np.pi)
     fig_P1 = sec.float("fig7_P1_hat", 0.4, ge=0.0, lt=1.0)
-    fig_Q1 = np.atleast_1d(sec.array("fig7_Q1_hat", [0.2, 0.4, 0.6, 0.8], ge=0.0, le=1.0))
+    fig_Q1 = sec.values("fig7_Q1_hat", [0.2, 0.4, 0.6, 0.8], ge=0.0, le=1.0)
     if fig_Q1.size == 0:   # no curve to draw (the grids refuse an empty list themselves)
         raise sec.error("fig7_Q1_hat", "must hold at least one value, got an empty list")
     run = case.section("run", required=False)
