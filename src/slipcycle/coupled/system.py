@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from slipcycle.errors import ModelError
+from slipcycle.io.case import friction_range_problem
 
 __all__ = ["CoupledSystem", "coupled_stiffness", "friction_per_node"]
 
@@ -109,4 +110,7 @@ def friction_per_node(friction, n: int, error: type[ModelError] = ModelError) ->
         raise error("friction", "must be finite")
     if np.any(f < 0):
         raise error("friction", f"must be >= 0, got {f[f < 0][0]:g}")
+    problem = friction_range_problem(f)
+    if problem:
+        raise error("friction", problem)
     return f

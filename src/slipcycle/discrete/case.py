@@ -60,7 +60,7 @@ def _matrices(sec: Section) -> tuple[dict, dict]:
             if sec.has(k):
                 raise sec.error(k, "give either stiffness_file or A, B, C inline, not both")
         path = sec.path("stiffness_file")
-        from slipcycle.discrete.sizes import check_memory, system_bytes
+        from slipcycle.coupled.sizes import check_memory, system_bytes
         from slipcycle.io.matrices import read_case_stiffness, stiffness_nodes
 
         n_file = stiffness_nodes(path)
@@ -191,7 +191,7 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     case.finish()
 
     # -- sizes: refuse what cannot be allocated, before any work --------------------------
-    from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
+    from slipcycle.coupled.sizes import check_memory, run_bytes, system_bytes
 
     check_memory(sec.key("A") if not sec.has("stiffness_file") else
                  sec.key("stiffness_file"), system_bytes(n), f"{n} contact nodes")

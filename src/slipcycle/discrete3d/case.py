@@ -136,10 +136,10 @@ def _check_sizes(sec: Section, rn: Section, n: int, run: RunSettings) -> None:
     """Refuse a model or a run whose memory exceeds the budget, before any work.
 
     A 3-D node has three degrees of freedom: the estimates of the 2-D model
-    (:mod:`slipcycle.discrete.sizes`, two per node) are taken for 2N nodes, an upper bound.
+    (:mod:`slipcycle.coupled.sizes`, two per node) are taken for 2N nodes, an upper bound.
     The key blamed is the one the user set (both appear in the message).
     """
-    from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
+    from slipcycle.coupled.sizes import check_memory, run_bytes, system_bytes
 
     check_memory(sec.key("stiffness_file" if sec.has("stiffness_file") else "C"),
                  system_bytes(2 * n), f"{n} contact nodes")

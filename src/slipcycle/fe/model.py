@@ -20,7 +20,7 @@ from slipcycle.fe.geometry import Grid, Material, Solid
 from slipcycle.fe.loads import combined_loads
 from slipcycle.fe.meshfile3d import MeshSolid
 from slipcycle.fe.reduction import Problem, ReducedModel
-from slipcycle.io.case import Case, CaseError, Section
+from slipcycle.io.case import Case, CaseError, Section, read_friction
 
 __all__ = ["GEOMETRIES", "build_problem", "discrete_case_text", "discrete3d_case_text",
            "discrete3d_load_terms", "read_discrete_table",
@@ -238,7 +238,7 @@ def read_discrete_table(fe: Section) -> dict | None:
     if sec is None:
         return None
     out = {
-        "friction": sec.float("friction", ge=0),
+        "friction": read_friction(sec, ge=0),
         "lam": sec.float("lam", 1.0),
         "cycles": sec.int("cycles", 40, ge=1),
         "steps_per_cycle": sec.int("steps_per_cycle", 400, ge=4),

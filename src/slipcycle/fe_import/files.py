@@ -77,6 +77,7 @@ def write_import(model: ImportModel, joint: ImportedJoint, out: str | Path) -> l
     data = _stiffness_arrays(joint.reduced, meta)
     text = discrete3d_case_text(model.discrete, joint.reduced, "stiffness.npz", joint.area,
                                 key=f"{MODEL}.discrete")
+    _check_runnable(text, data)
     report = json.dumps(joint.report, indent=2, default=str) + "\n"
     paths = [out / name for name in OUTPUT_FILES]
     write_together([
@@ -85,6 +86,36 @@ def write_import(model: ImportModel, joint: ImportedJoint, out: str | Path) -> l
         (paths[2], lambda tmp: tmp.write_text(report, encoding="utf-8")),
     ])
     return paths
+
+
+#: the key of ``[fe_import.discrete]`` behind a key of the ``discrete3d`` case it writes
+_WRITTEN_KEYS = {"discrete3d.friction": "friction", "loading.lam": "lam",
+                 "run.cycles": "cycles", "run.steps_per_cycle": "steps_per_cycle"}
+
+
+def _check_runnable(text: str, data: dict) -> None:
+    """Refuse, before anything is written, a ``discrete3d`` case that ``slipcycle run``
+    would refuse: the case text and its stiffness are read by the ``discrete3d`` reader
+    itself (in a temporary folder), and its error is said of the model file's
+    ``[fe_import.discrete]`` key (a tensile mean load, 1e30 cycles, f = 1e300 were
+    written, and refused only by the run)."""
+    import tempfile
+
+    from slipcycle.discrete3d.case import read_discrete3d_case
+    from slipcycle.io.case import read_case
+
+    with tempfile.TemporaryDirectory(prefix="slipcycle-reduce-") as tmp:
+        case = Path(tmp) / "case.toml"
+        _savez(Path(tmp) / "stiffness.npz", data)
+        case.write_text(text, encoding="utf-8")
+        try:
+            read_discrete3d_case(read_case(case))
+        except CaseError as exc:
+            key = _WRITTEN_KEYS.get(exc.key, "mean" if exc.key.startswith("loading")
+                                    else None)
+            where = f"{MODEL}.discrete" + (f".{key}" if key else "")
+            raise CaseError(where, f"the discrete3d case it writes would be refused: "
+                            f"{exc.key}: {exc.problem}") from None
 
 
 def reduce_import(path: str | Path, out: str | Path) -> dict:

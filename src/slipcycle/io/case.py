@@ -461,17 +461,38 @@ def case_error_of(exc, keys) -> CaseError:
 #: (1e100 in the rods' Iwan fit, 1.3e154 squared in Ŵ = W/(λ_c γσ f² P0)) the models'
 #: arithmetic overflows; a value this large is a typing or unit mistake
 MAX_FRICTION = 1e12
+#: smallest positive coefficient of friction accepted (0, frictionless, is accepted): a
+#: cone narrower than 1e-12 of the normal force is below what the solvers' force
+#: tolerances resolve (f = 1e-300 hung the 3-D engine and gave 700 events on one load
+#: segment in 2-D)
+MIN_FRICTION = 1e-12
 
 
 def read_friction(sec: Section, key: str = "friction", **bounds) -> float:
     """A coefficient of friction (one number): finite, within ``bounds`` and at most
     :data:`MAX_FRICTION`, which is refused naming the key."""
     f = sec.float(key, **bounds)
-    if f is not None and f > MAX_FRICTION:
-        raise sec.error(key, f"must be <= {MAX_FRICTION:g}, got {f:g}: a coefficient of "
-                             "friction is of order 1; one this large is a typing or unit "
-                             "mistake, and the models' friction forces would overflow")
+    if f is not None:
+        problem = friction_range_problem(np.asarray([f]))
+        if problem:
+            raise sec.error(key, problem)
     return f
+
+
+def friction_range_problem(f: np.ndarray) -> str | None:
+    """Why coefficients of friction ``f`` (finite, ≥ 0) lie outside what the models
+    compute with — above :data:`MAX_FRICTION` or positive below :data:`MIN_FRICTION` —
+    or None."""
+    big = f[f > MAX_FRICTION]
+    if big.size:
+        return (f"must be <= {MAX_FRICTION:g}, got {big[0]:g}: a coefficient of friction is "
+                "of order 1; one this large is a typing or unit mistake, and the models' "
+                "friction forces would overflow")
+    tiny = f[(f > 0) & (f < MIN_FRICTION)]
+    if tiny.size:
+        return (f"must be 0 (frictionless) or >= {MIN_FRICTION:g}, got {tiny[0]:g}: a "
+                "friction cone this narrow is below the solvers' force tolerance")
+    return None
 
 
 def read_steady_tol(sec: Section, default: float) -> float:

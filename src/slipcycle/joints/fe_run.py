@@ -31,6 +31,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from slipcycle.coupled.sizes import check_memory, run_bytes, system_bytes
 from slipcycle.discrete.case import (
     SUMMARY_UNITS,
     DiscreteResult,
@@ -39,7 +40,6 @@ from slipcycle.discrete.case import (
 )
 from slipcycle.discrete.loads import DiscreteLoad
 from slipcycle.discrete.model import FrictionalSystem
-from slipcycle.discrete.sizes import check_memory, run_bytes, system_bytes
 from slipcycle.discrete3d.case import discrete3d_case
 from slipcycle.discrete3d.case import solve_model as solve_model_3d
 from slipcycle.discrete3d.loads import Load3D

@@ -27,6 +27,7 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
+from slipcycle.coupled.sizes import cells_bytes, check_memory
 from slipcycle.discrete.basins import (
     INADMISSIBLE,
     admissible_box,
@@ -43,7 +44,6 @@ from slipcycle.discrete.shakedown import (
     safe_region,
     sample_initial_slips,
 )
-from slipcycle.discrete.sizes import cells_bytes, check_memory
 from slipcycle.io import Case, CaseError
 from slipcycle.plot.shakedown import basin_map
 from slipcycle.result import STEADY_STATES

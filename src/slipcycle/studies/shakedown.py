@@ -29,6 +29,7 @@ from typing import ClassVar
 import numpy as np
 import xarray as xr
 
+from slipcycle.coupled.sizes import cells_bytes, check_memory
 from slipcycle.discrete.basins import run_record
 from slipcycle.discrete.shakedown import (
     constraint_names,
@@ -40,7 +41,6 @@ from slipcycle.discrete.shakedown import (
     sample_initial_slips,
     simulation_brackets,
 )
-from slipcycle.discrete.sizes import cells_bytes, check_memory
 from slipcycle.discrete.steady import simulate
 from slipcycle.io import Case, CaseError
 from slipcycle.plot import shakedown as plots

@@ -1,0 +1,97 @@
+"""Values at the ends of what the models compute with are refused in one line naming the
+key, exit 2, nothing written; values just inside them run.
+
+- A coefficient of friction is 0 (frictionless) or in [1e-12, 1e12] in every model (one
+  check, :func:`slipcycle.io.case.friction_range_problem`): f = 1e-300 hung the 3-D engine
+  and gave "more than 700 events on one load segment" in 2-D; f = 1e300 overflowed.
+- ``slipcycle reduce`` of an ``fe_import`` model refuses a ``[fe_import.discrete]`` table
+  whose written ``discrete3d`` case ``slipcycle run`` would refuse (a tensile mean load,
+  1e30 cycles), naming the model file's key, before anything is written; the CalculiX
+  export is ccx's own (the shipped deck, run here).
+"""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+from calculix import run_ccx
+
+from slipcycle.examples import example_path
+
+ONE_NODE_3D = """
+model = "discrete3d"
+[discrete3d]
+A = [[2.0, 0.0], [0.0, 2.0]]
+B = [[0.0, 0.0]]
+C = [[2.0]]
+friction = {f}
+coordinates = [[0.0, 0.0, 0.0]]
+[loading]
+p0 = [1.0]
+q1 = [[0.6, 0.6]]
+q1_phase = [[0.0, -1.5707963]]
+[run]
+cycles = 10
+steps_per_cycle = 40
+"""
+
+
+@pytest.mark.parametrize("f,ok", [("1e-300", False), ("1e-13", False), ("1e-12", True),
+                                  ("0.0", True), ("1e12", True), ("1e13", False)])
+def test_friction_of_a_3d_node_is_zero_or_within_1e_12_to_1e12(tmp_path, run_cli, f, ok):
+    case = tmp_path / "c.toml"
+    case.write_text(ONE_NODE_3D.format(f=f))
+    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    if ok:
+        assert code == 0, err
+    else:
+        assert code == 2 and err.count("\n") == 1 and "discrete3d.friction" in err
+        assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("f", ["1e-300", "1e300"])
+def test_friction_of_an_fe_model_out_of_range_is_refused_naming_its_key(tmp_path, run_cli, f):
+    text = example_path("fe_block_nu03").read_text(encoding="utf-8")
+    assert "\nfriction = 0.5\n" in text
+    case = tmp_path / "fe.toml"
+    case.write_text(text.replace("\nfriction = 0.5\n", f"\nfriction = {f}\n"))
+    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    assert code == 2 and err.count("\n") == 1 and "fe.discrete.friction" in err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.fixture(scope="module")
+def calculix_block(tmp_path_factory):
+    """The shipped CalculiX block deck, run by ccx: its .sti and .dof beside the model."""
+    work = tmp_path_factory.mktemp("ccx_block")
+    deck = example_path("calculix_block").with_suffix(".inp").read_text(encoding="utf-8")
+    run_ccx(deck, work, jobname="calculix_block")
+    shutil.copy(example_path("calculix_block"), work / "calculix_block.toml")
+    return work
+
+
+@pytest.mark.parametrize("edit,key", [
+    (("cycles = 200", "cycles = 1000000000000000000000000000000"), "fe_import.discrete."),
+    (("normal = 1.0", "normal = -1.0"), "fe_import.discrete.mean"),
+    (("friction = 0.5", "friction = 1e300"), "fe_import.discrete.friction"),
+])
+def test_reduce_refuses_a_discrete_table_whose_case_run_would_refuse(calculix_block, run_cli,
+                                                                     edit, key):
+    text = (calculix_block / "calculix_block.toml").read_text(encoding="utf-8")
+    assert edit[0] in text
+    model = calculix_block / "m.toml"
+    model.write_text(text.replace(edit[0], edit[1], 1))
+    out = calculix_block / "out"
+    code, _, err = run_cli("-q", "reduce", model, "--out", out)
+    assert code == 2 and err.count("\n") == 1 and key in err, err
+    assert not out.exists()
+
+
+def test_reduce_writes_a_case_that_runs(calculix_block, run_cli):
+    out = calculix_block / "good"
+    code, _, err = run_cli("-q", "reduce", calculix_block / "calculix_block.toml",
+                           "--out", out)
+    assert code == 0, err
+    assert sorted(p.name for p in out.iterdir()) == ["case.toml", "report.txt",
+                                                     "stiffness.npz"]
