@@ -95,3 +95,18 @@ def test_reduce_writes_a_case_that_runs(calculix_block, run_cli):
     assert code == 0, err
     assert sorted(p.name for p in out.iterdir()) == ["case.toml", "report.txt",
                                                      "stiffness.npz"]
+
+
+def test_loads_too_far_apart_for_double_precision_are_named_as_the_cause(tmp_path, run_cli):
+    """A tangential amplitude of 1e10 m on a 1 µm preload: the 2-D rate problem has no
+    solution (the preload is below the round-off of the tangential forces); with f checked
+    below f_crit the message names the load sizes, not f (it blamed f_crit before)."""
+    text = example_path("fe_block_nu03").read_text(encoding="utf-8")
+    old = "tangential = 1.5e-6"
+    assert old in text
+    case = tmp_path / "fe.toml"
+    case.write_text(text.replace(old, "tangential = 1e10", 1))
+    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    assert code == 3 and err.count("\n") == 1
+    assert "loads of sizes too far apart for double precision" in err
+    assert not (tmp_path / "out").exists()

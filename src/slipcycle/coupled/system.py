@@ -79,6 +79,20 @@ class CoupledSystem:
                              remedy=("accept_ill_posed", True, "run anyway"))
 
 
+def likely_cause(system) -> str:
+    """Why the incremental or rate problem of a coupled system may have no solution: f
+    above its critical value for the current slipping and separated nodes (a system run
+    with ``accept_ill_posed``), or, f checked below it, loads of sizes too far apart for
+    double precision (a preload 1e16 times a service load, a displacement amplitude of
+    1e10 m on a µm preload)."""
+    if getattr(system, "accept_ill_posed", True):
+        return ("the friction coefficient is probably above the critical value for the "
+                "current set of slipping and separated nodes")
+    return ("f is below the sampled critical value, so the likely cause is loads of "
+            "sizes too far apart for double precision (the round-off of the largest "
+            "above the smallest), or a critical value the sampling missed")
+
+
 def coupled_stiffness(A: np.ndarray, B: np.ndarray, C: np.ndarray,
                       error: type[ModelError] = ModelError) -> np.ndarray:
     """The reduced stiffness K = [[A, Bᵀ], [B, C]] [N/m], refused (keyed ``B``) unless it is

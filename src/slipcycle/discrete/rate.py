@@ -51,6 +51,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from slipcycle.coupled.system import likely_cause
 from slipcycle.discrete.lcp import lemke
 from slipcycle.discrete.model import SEPARATED, SLIP_NEG, SLIP_POS, STICK, FrictionalSystem
 from slipcycle.errors import SolverError
@@ -653,8 +654,7 @@ class RateSolver:
         if z is None:
             raise RateProblemError(
                 "the rate problem has no solution at this state (Lemke ray termination); "
-                "the friction coefficient is probably above f_crit for the current set of "
-                "slipping and separated nodes")
+                + likely_cause(self.sys))
         xd = np.zeros(2 * n)
         np.add.at(xd, zc, zs * z)
         if U.size:

@@ -101,6 +101,7 @@ import numpy as np
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 from scipy.linalg.lapack import dgetrf
 
+from slipcycle.coupled.system import likely_cause
 from slipcycle.discrete3d._kernels import (
     active_newton,
     active_residual,
@@ -1295,14 +1296,8 @@ class Evolution3D:
                            fa=fm, fb=fb, at_event=at_event)
 
     def _likely_cause(self) -> str:
-        """Why a step may have no solution: f above its critical value, or (f checked
-        below it) loads too far apart in size for double precision."""
-        if getattr(self.sys, "accept_ill_posed", True):
-            return ("the friction coefficient is probably above the critical value for the "
-                    "current set of slipping and separated nodes")
-        return ("f is below the sampled critical value, so the likely cause is loads of "
-                "sizes too far apart for double precision (the round-off of the largest "
-                "above the smallest), or a critical value the sampling missed")
+        """Why a step may have no solution (:func:`~slipcycle.coupled.system.likely_cause`)."""
+        return likely_cause(self.sys)
 
     def _condense_interval(self, rwa: np.ndarray, rwb: np.ndarray) -> Step | None:
         """Where no condensation is active (the first path, or one that fell back),
