@@ -110,3 +110,21 @@ def test_loads_too_far_apart_for_double_precision_are_named_as_the_cause(tmp_pat
     assert code == 3 and err.count("\n") == 1
     assert "loads of sizes too far apart for double precision" in err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("example,old,new,key", [
+    ("halfspace_sphere", "radius = 0.01", "radius = 1e-300", "halfspace.radius"),
+    ("halfspace_rough", "P0 = 1000.0", "P0 = 0.0", "loading.P0"),
+    ("halfspace_rough", "P1 = 400.0", "P1 = 1400.0", "loading.P1"),
+])
+def test_halfspace_loads_and_sizes_out_of_range_blame_their_own_key(tmp_path, run_cli,
+                                                                    example, old, new, key):
+    """A sphere of radius 1e-300 m overflowed 1/(2R) (an internal error); a rough
+    contact whose mean P0 is not compressive blamed the amplitude P1."""
+    text = example_path(example).read_text(encoding="utf-8")
+    assert old in text
+    case = tmp_path / "c.toml"
+    case.write_text(text.replace(old, new, 1))
+    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
+    assert not (tmp_path / "out").exists()

@@ -313,11 +313,17 @@ def _load_path_key(model: HalfspaceModel, exc: LoadPathError) -> str:
     if isinstance(model.normal, TabulatedLoad):
         normal = f"loading.{nk}"
     else:
-        normal = f"loading.{nk}0" if exc.reason == "never_compressive" else f"loading.{nk}1"
+        mean = float(np.ravel(getattr(model.normal, "mean", [1.0]))[0])
+        # a mean that is not compressive itself is the key at fault, else the amplitude
+        low_mean = exc.reason == "never_compressive" or (
+            exc.reason in ("rough_unloaded", "tensile") and mean <= 0)
+        normal = f"loading.{nk}0" if low_mean else f"loading.{nk}1"
     if exc.key.startswith("protocol["):
         return f"loading.{exc.key}.{nk}"
+    size = "halfspace.coefficient" if type(model.profile).__name__ == "PowerLaw" \
+        and model.profile_name == "power_law" else "halfspace.radius"
     return {"normal": normal, "profile.reference_depth": "halfspace.reference_depth",
-            "profile": "halfspace.table_P"}.get(exc.key, exc.key)
+            "profile": "halfspace.table_P", "profile.size": size}.get(exc.key, exc.key)
 
 
 def memory_estimate(model: HalfspaceModel) -> float:

@@ -187,12 +187,31 @@ class HalfspaceModel:
             if v < 0:
                 raise LoadPathError(key, f"normal load becomes tensile (minimum {v:g} N); "
                                          "adhesion is not modelled", "tensile")
+        self._check_computable(hi)
         if isinstance(self.profile, Cylinder2D) and hi >= self.profile.max_load():
             raise LoadPathError("profile.reference_depth", "too shallow for the largest "
                                 "load: the plane approach needs a < 2d/e", "reference_depth")
         if isinstance(self.profile, Tabulated) and hi > self.profile.P[-1] * (1 + 1e-12):
             raise LoadPathError("profile", f"table ends at {self.profile.P[-1]:g} N but the "
                                            f"loads reach {hi:g} N", "table_end")
+
+    def _check_computable(self, P_max: float) -> None:
+        """Refuse (key ``profile.size``) a profile whose contact under the largest load
+        ``P_max`` double precision cannot compute: a radius of 1e-300 m overflowed the
+        sphere's coefficient 1/(2R) and ended in an internal error."""
+        P = np.array([P_max])
+        with np.errstate(all="ignore"):
+            values = [self.profile.approach(P), self.profile.compliance(P)]
+            size = self.profile.contact_size(P)
+        if size is not None:
+            values.append(np.asarray(size, float))
+        if all(np.all(np.isfinite(v) & (np.asarray(v) > 0)) for v in values):
+            return
+        raise LoadPathError("profile.size", "the contact under the largest load "
+                            f"({P_max:.3g} N) is beyond what double precision computes "
+                            "(approach, compliance and contact size must be finite and "
+                            "> 0): check the size and units of the profile",
+                            "not_computable")
 
     @classmethod
     def harmonic(cls, profile, friction: float, compliance_ratio: float, *, P0: float,
