@@ -128,3 +128,19 @@ def test_halfspace_loads_and_sizes_out_of_range_blame_their_own_key(tmp_path, ru
     code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
     assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_rough_surface_pressed_below_1e_12_of_its_modulus_is_refused(tmp_path, run_cli):
+    """nominal_area = 1e300 m²: the BEM ran 20000 iterations at 7.5e-300 Pa and ended in
+    a solver error (exit 3, after numerical warnings)."""
+    pytest.importorskip("ContactMechanics")
+    code, _, err = run_cli("-q", "examples", "halfspace_topography", "--copy", tmp_path)
+    assert code == 0, err
+    case = tmp_path / "halfspace_topography.toml"
+    text = case.read_text(encoding="utf-8")
+    line = next(ln for ln in text.splitlines() if ln.startswith("nominal_area"))
+    case.write_text(text.replace(line, "nominal_area = 1e300", 1))
+    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    assert code == 2 and err.count("\n") == 1
+    assert err.startswith("error: halfspace.nominal_area:") and "1e-12 E*" in err
+    assert not (tmp_path / "out").exists()

@@ -951,9 +951,18 @@ class TopographySource:
 
     def check_pressure(self, p_max: float, surface: SurfaceMap | None = None) -> None:
         """Refuse (``nominal_area``) BEM pressures up to 1.25 ``p_max`` (Pa) beyond the
-        complete contact of the map on the BEM grid: there the approach stops changing, the
-        normal law ends and the BEM cannot converge."""
+        complete contact of the map on the BEM grid (there the approach stops changing, the
+        normal law ends and the BEM cannot converge), or below :data:`MIN_PRESSURE_RATIO`
+        × E*."""
         s = self.surface() if surface is None else surface
+        if not 1.25 * p_max >= MIN_PRESSURE_RATIO * self.contact_modulus:
+            # the BEM's iteration stalls far below (7.5e-20 Pa: no convergence in 20000
+            # steps, exit 3); such a contact touches at a few points of the map
+            raise InputError("nominal_area", f"the largest nominal pressure, "
+                             f"{1.25 * p_max:.3g} Pa (1.25 x largest load / nominal_area), "
+                             f"is below {MIN_PRESSURE_RATIO:g} E* "
+                             f"({MIN_PRESSURE_RATIO * self.contact_modulus:.3g} Pa): check "
+                             "nominal_area (m²) and the units of the loads")
         p_full = s.complete_contact_pressure(self.contact_modulus)
         if 1.25 * p_max >= p_full:
             raise InputError("nominal_area", f"the BEM would press the surface up to "
@@ -1009,6 +1018,10 @@ class TopographySource:
             entries["gamma_sigma"] = float(profile.gamma_sigma)
         return entries
 
+
+#: smallest largest nominal pressure of a BEM law, relative to E* (:meth:`TopographySource.
+#: check_pressure`): the BEM converges down to about 1e-17 E* on the example surface
+MIN_PRESSURE_RATIO = 1e-12
 
 #: units of the numeric entries of :meth:`TopographySource.describe`
 SURFACE_UNITS = {"map_points": "1", "map_size": "m", "rms_height": "m", "bem_grid": "1",
