@@ -144,3 +144,25 @@ def test_a_rough_surface_pressed_below_1e_12_of_its_modulus_is_refused(tmp_path,
     assert code == 2 and err.count("\n") == 1
     assert err.startswith("error: halfspace.nominal_area:") and "1e-12 E*" in err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("old,new,key", [
+    ("width = 0.04", "width = 1e-300", "fe.width"),
+    ("width = 0.04", "width = 1e300", "fe.width"),
+    ("thickness = 0.01", "thickness = 1e-300", "fe.thickness"),
+    ("height = 0.02", "height = 1e-300", "fe.height"),
+    ("height = 0.02", "height = 200", "fe.height"),      # 5000 times the width
+    ("width = 0.04", "width = 1e-9", "fe.height"),       # 2e7 times the width
+])
+def test_fe_geometry_beyond_double_precision_is_refused_naming_its_key(tmp_path, run_cli,
+                                                                      old, new, key):
+    """Lengths outside [1e-9, 1e9] m and bodies more slender than 1e-7 … 100 times their
+    width: before, numerical warnings filled the output and the message blamed a
+    platen tie, the material constants or fe.discrete.friction."""
+    text = example_path("fe_block_nu03").read_text(encoding="utf-8")
+    assert old in text
+    case = tmp_path / "fe.toml"
+    case.write_text(text.replace(old, new, 1))
+    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
+    assert not (tmp_path / "out").exists()

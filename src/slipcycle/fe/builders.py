@@ -29,7 +29,8 @@ from slipcycle.fe.geometry import (
     Grid,
     Solid,
     block_mesh,
-    check_number,
+    check_length,
+    check_proportion,
     cylinder_segment_mesh,
     interface_grid,
     solid,
@@ -183,6 +184,7 @@ def block_on_rigid(*, width: float, height: float, E: float, nu: float,
     cw = width if contact_width is None else contact_width
     Grid(width, cw, elements, grading, thickness)
     Solid(E=E, nu=nu, height=height)
+    check_proportion("height", height, width)
     x = interface_grid(width, cw, elements, grading)
     h0 = cw / elements
     mesh = block_mesh(x, height, h0, grading, "above", cw / 2)
@@ -267,6 +269,8 @@ def two_blocks(*, width: float, upper: dict, lower: dict, contact_width: float |
     cw = width if contact_width is None else contact_width
     Grid(width, cw, elements, grading, thickness)
     upper, lower = solid("upper", upper).as_dict(), solid("lower", lower).as_dict()
+    for name, body in (("upper", upper), ("lower", lower)):
+        check_proportion(f"{name}.height", body["height"], width)
     x = interface_grid(width, cw, elements, grading)
     h0 = cw / elements
     b1 = Body("upper", block_mesh(x, upper["height"], h0, grading, "above", cw / 2),
@@ -355,12 +359,14 @@ def cylinder_on_block(*, radius: float, cylinder: dict, block: dict, width: floa
     (1985). Contact Mechanics, §4.2 and §7.6 (the 2-D Hertz and Cattaneo–Mindlin
     solutions the model is checked against).
     """
-    check_number("radius", radius, gt=0)
+    check_length("radius", radius)
     if width >= 2 * radius:
         raise ValueError("cylinder_on_block: width must be smaller than 2 * radius")
     cw = contact_width
     Grid(width, cw, elements, grading, thickness)
     cylinder, block = solid("cylinder", cylinder).as_dict(), solid("block", block).as_dict()
+    for name, body in (("cylinder", cylinder), ("block", block)):
+        check_proportion(f"{name}.height", body["height"], width)
     x = interface_grid(width, cw, elements, grading)
     h0 = cw / elements
     mesh1, _ = cylinder_segment_mesh(x, radius, cylinder["height"], h0, grading, cw / 2)

@@ -27,9 +27,9 @@ from skfem import MeshTri
 
 from slipcycle.errors import InputError
 
-__all__ = ["Body", "Material", "Solid", "Grid", "check_number", "solid",
-           "graded_spacing", "interface_grid", "depth_grid", "block_mesh",
-           "cylinder_segment_mesh"]
+__all__ = ["Body", "Material", "Solid", "Grid", "check_number", "check_length",
+           "check_proportion", "solid", "graded_spacing", "interface_grid", "depth_grid",
+           "block_mesh", "cylinder_segment_mesh"]
 
 
 def check_number(name: str, value: Any, *, gt: float | None = None, ge: float | None = None,
@@ -56,6 +56,41 @@ def check_number(name: str, value: Any, *, gt: float | None = None, ge: float | 
         if bound is not None and not ok:
             raise InputError(name, f"must be {sym} {bound:g}, got {value:g}")
     return int(value) if integer else float(value)
+
+
+#: the lengths a generated finite-element geometry may have [m]: a nanometre to a
+#: million kilometres; beyond, the mesh's Jacobians under- or overflow (a width of 1e-300
+#: m filled the output with division warnings and blamed another key)
+LENGTH_RANGE = (1e-9, 1e9)
+
+
+def check_length(name: str, value: Any) -> float:
+    """A length [m] of a generated geometry: a finite number within :data:`LENGTH_RANGE`
+    (refused keyed ``name``, as :func:`check_number`)."""
+    lo, hi = LENGTH_RANGE
+    value = check_number(name, value, gt=0)
+    if not lo <= value <= hi:
+        raise InputError(name, f"must be between {lo:g} m and {hi:g} m, got {value:g}: "
+                               "check its units (m)")
+    return value
+
+
+#: height / width of a generated body [1]: a block 5000 times as tall as wide reduced to
+#: a numerically singular stiffness (reported as "not supported against rigid motion"),
+#: one 2e7 times as tall as wide to one that was not positive definite
+ASPECT_RANGE = (1e-7, 100.0)
+
+
+def check_proportion(name: str, height: float, width: float) -> None:
+    """Refuse (keyed ``name``, the height's key) a body whose height / ``width`` lies
+    outside :data:`ASPECT_RANGE`: its mesh's stiffness is beyond double precision."""
+    lo, hi = ASPECT_RANGE
+    ratio = height / width
+    if not lo <= ratio <= hi:
+        raise InputError(name, f"must be between {lo:g} and {hi:g} times the width "
+                               f"({width:g} m), got {height:g} m ({ratio:.3g} times): the "
+                               "mesh of so slender a body has a numerically singular "
+                               "stiffness; check the units (m)")
 
 
 @dataclass(frozen=True)
@@ -96,7 +131,7 @@ class Solid(Material):
     height: float = float("nan")
 
     def __post_init__(self):
-        check_number("height", self.height, gt=0)
+        check_length("height", self.height)
         super().__post_init__()
 
     def as_dict(self) -> dict:
@@ -159,11 +194,11 @@ class Grid:
     thickness: float = 1.0
 
     def __post_init__(self):
-        check_number("width", self.width, gt=0)
+        check_length("width", self.width)
         check_number("contact_width", self.contact_width, gt=0, le=self.width)
         check_number("elements", self.elements, ge=1, integer=True)
         check_number("grading", self.grading, ge=1.0)
-        check_number("thickness", self.thickness, gt=0)
+        check_length("thickness", self.thickness)
 
 
 @dataclass(frozen=True)

@@ -114,7 +114,7 @@ from slipcycle.condensation import factorize
 from slipcycle.errors import InputError
 from slipcycle.fe.assembly import stiffness
 from slipcycle.fe.contact3d import Case3D, condense_contact_3d, node_dofs_3d
-from slipcycle.fe.geometry import check_number
+from slipcycle.fe.geometry import check_length, check_number
 from slipcycle.fe.hex8i import hex8i_stiffness
 from slipcycle.fe.lap_joint_mesh import cell_weights, extrude_hexes, extrude_tets, plan_mesh
 from slipcycle.io.matrices import ReducedStiffness
@@ -223,9 +223,10 @@ class LapJoint:
     _centres: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        for name in ("plate_length", "plate_width", "thickness", "overlap", "E",
+        for name in ("plate_length", "plate_width", "thickness", "overlap",
                      "bolt_diameter", "washer_diameter", "mesh_size"):
-            check_number(name, getattr(self, name), gt=0.0)
+            check_length(name, getattr(self, name))
+        check_number("E", self.E, gt=0.0)
         check_number("nu", self.nu, ge=0.0, lt=0.5)
         check_number("bolt_count", self.bolt_count, ge=2, le=6, integer=True)
         check_number("growth", self.growth, ge=1.0, le=20.0)

@@ -16,7 +16,7 @@ import numpy as np
 
 from slipcycle.errors import InputError
 from slipcycle.fe import builders
-from slipcycle.fe.geometry import Grid, Material, Solid
+from slipcycle.fe.geometry import Grid, Material, Solid, check_proportion
 from slipcycle.fe.loads import combined_loads
 from slipcycle.fe.meshfile3d import MeshSolid
 from slipcycle.fe.reduction import Problem, ReducedModel
@@ -88,6 +88,8 @@ def build_problem(case: Case) -> Problem | MeshSolid:
         _make(fe, Grid, width=width, contact_width=cw)
         cyl, blk = fe.table("cylinder"), fe.table("block")
         cyl_d, blk_d = _body(cyl), _body(blk)
+        _proportion(cyl, cyl_d, width)
+        _proportion(blk, blk_d, width)
         ymin = radius - np.sqrt(radius**2 - (width / 2) ** 2)
         if cyl_d["height"] <= 1.5 * ymin:
             raise cyl.error("height", f"must exceed 1.5 × the arc height at the sides "
@@ -101,15 +103,27 @@ def build_problem(case: Case) -> Problem | MeshSolid:
     _make(fe, Grid, width=width, contact_width=cw)
     if geometry == "block_on_rigid":
         body = _body(fe)
+        _proportion(fe, body, width)
         case.finish()
         return builders.block_on_rigid(width=width, contact_width=cw, **body, **grid, **common)
     up, lo = fe.table("upper"), fe.table("lower")
     up_d, lo_d = _body(up), _body(lo)
+    _proportion(up, up_d, width)
+    _proportion(lo, lo_d, width)
     up.finish()
     lo.finish()
     case.finish()
     return builders.two_blocks(width=width, contact_width=cw, upper=up_d, lower=lo_d,
                                **grid, **common)
+
+
+def _proportion(sec: Section, body: dict, width: float) -> None:
+    """:func:`~slipcycle.fe.geometry.check_proportion` of a body table's ``height``,
+    keyed by the table's key."""
+    try:
+        check_proportion("height", body["height"], width)
+    except InputError as exc:
+        raise sec.error("height", exc.problem) from None
 
 
 def _load_specs(fe: Section, dims: int) -> list[dict]:

@@ -45,7 +45,7 @@ from skfem import MeshTet
 
 from slipcycle.errors import InputError
 from slipcycle.fe.contact3d import ELEMENTS_3D, Case3D, mesh_nodes, node_dofs_3d, reduce_contact_3d
-from slipcycle.fe.geometry import check_number, depth_grid, interface_grid
+from slipcycle.fe.geometry import check_length, check_number, depth_grid, interface_grid
 from slipcycle.io.matrices import ReducedStiffness
 
 __all__ = ["Block3D", "block_mesh_3d", "node_dofs_3d", "reduce_on_rigid_flat",
@@ -98,7 +98,9 @@ class Block3D:
     formulation: str = "auto"
 
     def __post_init__(self):
-        for name in ("width_x", "width_y", "height", "E", "contact_x", "contact_y"):
+        for name in ("width_x", "width_y", "height"):
+            check_length(name, getattr(self, name))
+        for name in ("E", "contact_x", "contact_y"):
             check_number(name, getattr(self, name), gt=0.0)
         check_number("nu", self.nu, ge=0.0, lt=0.5)
         check_number("contact_x", self.contact_x, le=self.width_x)
@@ -106,7 +108,7 @@ class Block3D:
         check_number("elements", self.elements, ge=1)
         check_number("grading", self.grading, ge=1.0, le=3.0)
         if self.radius is not None:
-            check_number("radius", self.radius, gt=0.0)
+            check_length("radius", self.radius)
         if self.element not in ELEMENTS_3D:
             raise InputError("element", f"must be one of {', '.join(ELEMENTS_3D)}, "
                              f"got {self.element!r}")

@@ -235,7 +235,7 @@ def _solve_solid(fc: FECase, solid: MeshSolid, progress) -> tuple[Any, MeshRun]:
                                     coordinates=red.coordinates, normals=red.normals,
                                     tangents=red.tangents, area=area)
     except ModelError3D as exc:
-        raise CaseError("fe.discrete.friction", str(exc)) from None
+        raise _system_error(exc, "") from None
     dc = discrete3d_case(system, Load3D(p=zero, q=zero_q, cases=cases),
                          {"cycles": tab["cycles"], "steps_per_cycle": tab["steps_per_cycle"]},
                          fields=())
@@ -250,6 +250,18 @@ def _solve_solid(fc: FECase, solid: MeshSolid, progress) -> tuple[Any, MeshRun]:
                   steady_state=res.steady_state_detail, cycles_run=res.cycles_run,
                   converged=res.converged, reduce_seconds=t1 - t0, solve_seconds=t2 - t1)
     return res, run
+
+
+def _system_error(exc: InputError, where: str) -> CaseError:
+    """The case-file error of a reduced system the discrete model refuses: its friction
+    is ``fe.discrete.friction``; its matrices A, B, C come from the mesh (``fe``): a
+    block a thousand times as tall as wide reduced to a numerically singular A, which
+    was reported as a friction coefficient that "must be positive definite"."""
+    if exc.key in ("A", "B", "C"):
+        return CaseError("fe", f"the reduced stiffness {exc.key} {exc.problem}{where}: the "
+                         "mesh is numerically singular; check the geometry's proportions "
+                         "and units")
+    return CaseError("fe.discrete.friction", f"{exc.problem}{where}")
 
 
 def _solve_mesh(fc: FECase, problem: Problem, elements: int | None, progress
@@ -272,7 +284,7 @@ def _solve_mesh(fc: FECase, problem: Problem, elements: int | None, progress
         system = FrictionalSystem(reduced.A, reduced.B, reduced.C, tab["friction"])
     except InputError as exc:
         where = f" (mesh of {elements} elements)" if elements is not None else ""
-        raise CaseError("fe.discrete.friction", f"{exc.problem}{where}") from None
+        raise _system_error(exc, where) from None
     dc = discrete_case(system, DiscreteLoad(p, q), {"cycles": tab["cycles"],
                                                     "steps_per_cycle": tab["steps_per_cycle"]})
     res = solve_model(dc, progress=progress)
