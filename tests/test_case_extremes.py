@@ -166,3 +166,19 @@ def test_fe_geometry_beyond_double_precision_is_refused_naming_its_key(tmp_path,
     code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
     assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("old,new,key", [
+    ("cycles = 40", "cycles = 1000000000000000000000000000000", "fe.discrete.cycles"),
+    ("steps_per_cycle = 400", "steps_per_cycle = 1000000000000000000000000000000",
+     "fe.discrete.steps_per_cycle"),
+])
+def test_fe_run_counts_beyond_memory_blame_the_count(tmp_path, run_cli, old, new, key):
+    """1e30 cycles were refused as fe.convergence.refinements (the mesh study)."""
+    text = example_path("fe_block_nu03").read_text(encoding="utf-8")
+    assert old in text
+    case = tmp_path / "fe.toml"
+    case.write_text(text.replace(old, new, 1))
+    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
+    assert not (tmp_path / "out").exists()

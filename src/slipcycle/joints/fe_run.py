@@ -204,9 +204,13 @@ def read_fe_case(case: Case) -> FECase:
     if elements is not None and elements * finest_r > _MAX_ELEMENTS:
         raise CaseError(key, f"the finest mesh would have {elements * finest_r} elements "
                              f"(elements × {finest_r}); at most {_MAX_ELEMENTS}")
-    check_memory(key, system_bytes(n_nodes) + run_bytes(
-        n_nodes, table["steps_per_cycle"], table["cycles"], True),
-        f"{n_nodes} contact nodes on the finest mesh")
+    check_memory(key, system_bytes(n_nodes), f"{n_nodes} contact nodes on the finest mesh")
+    # the run's histories: blamed on the longer of its two counts, which the user set
+    steps, cycles = table["steps_per_cycle"], table["cycles"]
+    check_memory("fe.discrete.cycles" if cycles >= steps else "fe.discrete.steps_per_cycle",
+                 system_bytes(n_nodes) + run_bytes(n_nodes, steps, cycles, True),
+                 f"{steps:g} steps per cycle × up to {cycles:g} cycles ({n_nodes} contact "
+                 "nodes on the finest mesh, every cycle recorded)")
     return FECase(case, problem, geometry, elements, conv["refinements"], conv["rtol"],
                   table)
 
