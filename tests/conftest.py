@@ -185,3 +185,23 @@ def assert_same_steady_state(fast, plain, rel: float = 1e-6):
     np.testing.assert_allclose(fast.dissipation_per_node, plain.dissipation_per_node,
                                rtol=0, atol=rel * scale)
     assert fast.permanently_stuck_nodes == plain.permanently_stuck_nodes
+
+
+#: one contact node of a 3-D body under a rotating tangential load (format ``f``: its
+#: friction coefficient): the smallest discrete3d case, at the origin
+ONE_NODE_3D = """
+model = "discrete3d"
+[discrete3d]
+A = [[2.0, 0.0], [0.0, 2.0]]
+B = [[0.0, 0.0]]
+C = [[2.0]]
+friction = {f}
+coordinates = [[0.0, 0.0, 0.0]]
+[loading]
+p0 = [1.0]
+q1 = [[0.6, 0.6]]
+q1_phase = [[0.0, -1.5707963]]
+[run]
+cycles = 10
+steps_per_cycle = 40
+"""

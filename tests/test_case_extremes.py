@@ -16,25 +16,26 @@ import shutil
 
 import pytest
 from calculix import run_ccx
+from conftest import ONE_NODE_3D
 
 from slipcycle.examples import example_path
 
-ONE_NODE_3D = """
-model = "discrete3d"
-[discrete3d]
-A = [[2.0, 0.0], [0.0, 2.0]]
-B = [[0.0, 0.0]]
-C = [[2.0]]
-friction = {f}
-coordinates = [[0.0, 0.0, 0.0]]
-[loading]
-p0 = [1.0]
-q1 = [[0.6, 0.6]]
-q1_phase = [[0.0, -1.5707963]]
-[run]
-cycles = 10
-steps_per_cycle = 40
-"""
+
+def _run_edited(tmp_path, run_cli, example: str, old: str, new: str):
+    """``slipcycle -q run`` of the shipped ``example`` with ``old`` replaced by ``new``
+    once: (exit code, stderr)."""
+    text = example_path(example).read_text(encoding="utf-8")
+    assert old in text
+    case = tmp_path / "c.toml"
+    case.write_text(text.replace(old, new, 1))
+    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    return code, err
+
+
+def _assert_refused(tmp_path, code: int, err: str, key: str) -> None:
+    """One line naming ``key``, exit 2, no output folder."""
+    assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize("f,ok", [("1e-300", False), ("1e-13", False), ("1e-12", True),
@@ -52,13 +53,9 @@ def test_friction_of_a_3d_node_is_zero_or_within_1e_12_to_1e12(tmp_path, run_cli
 
 @pytest.mark.parametrize("f", ["1e-300", "1e300"])
 def test_friction_of_an_fe_model_out_of_range_is_refused_naming_its_key(tmp_path, run_cli, f):
-    text = example_path("fe_block_nu03").read_text(encoding="utf-8")
-    assert "\nfriction = 0.5\n" in text
-    case = tmp_path / "fe.toml"
-    case.write_text(text.replace("\nfriction = 0.5\n", f"\nfriction = {f}\n"))
-    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
-    assert code == 2 and err.count("\n") == 1 and "fe.discrete.friction" in err
-    assert not (tmp_path / "out").exists()
+    code, err = _run_edited(tmp_path, run_cli, "fe_block_nu03", "\nfriction = 0.5\n",
+                            f"\nfriction = {f}\n")
+    _assert_refused(tmp_path, code, err, "fe.discrete.friction")
 
 
 @pytest.fixture(scope="module")
@@ -101,12 +98,8 @@ def test_loads_too_far_apart_for_double_precision_are_named_as_the_cause(tmp_pat
     """A tangential amplitude of 1e10 m on a 1 µm preload: the 2-D rate problem has no
     solution (the preload is below the round-off of the tangential forces); with f checked
     below f_crit the message names the load sizes, not f (it blamed f_crit before)."""
-    text = example_path("fe_block_nu03").read_text(encoding="utf-8")
-    old = "tangential = 1.5e-6"
-    assert old in text
-    case = tmp_path / "fe.toml"
-    case.write_text(text.replace(old, "tangential = 1e10", 1))
-    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
+    code, err = _run_edited(tmp_path, run_cli, "fe_block_nu03", "tangential = 1.5e-6",
+                            "tangential = 1e10")
     assert code == 3 and err.count("\n") == 1
     assert "loads of sizes too far apart for double precision" in err
     assert not (tmp_path / "out").exists()
@@ -121,13 +114,8 @@ def test_halfspace_loads_and_sizes_out_of_range_blame_their_own_key(tmp_path, ru
                                                                     example, old, new, key):
     """A sphere of radius 1e-300 m overflowed 1/(2R) (an internal error); a rough
     contact whose mean P0 is not compressive blamed the amplitude P1."""
-    text = example_path(example).read_text(encoding="utf-8")
-    assert old in text
-    case = tmp_path / "c.toml"
-    case.write_text(text.replace(old, new, 1))
-    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
-    assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
-    assert not (tmp_path / "out").exists()
+    code, err = _run_edited(tmp_path, run_cli, example, old, new)
+    _assert_refused(tmp_path, code, err, key)
 
 
 def test_a_rough_surface_pressed_below_1e_12_of_its_modulus_is_refused(tmp_path, run_cli):
@@ -159,13 +147,8 @@ def test_fe_geometry_beyond_double_precision_is_refused_naming_its_key(tmp_path,
     """Lengths outside [1e-9, 1e9] m and bodies more slender than 1e-7 … 100 times their
     width: before, numerical warnings filled the output and the message blamed a
     platen tie, the material constants or fe.discrete.friction."""
-    text = example_path("fe_block_nu03").read_text(encoding="utf-8")
-    assert old in text
-    case = tmp_path / "fe.toml"
-    case.write_text(text.replace(old, new, 1))
-    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
-    assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
-    assert not (tmp_path / "out").exists()
+    code, err = _run_edited(tmp_path, run_cli, "fe_block_nu03", old, new)
+    _assert_refused(tmp_path, code, err, key)
 
 
 @pytest.mark.parametrize("old,new,key", [
@@ -175,10 +158,5 @@ def test_fe_geometry_beyond_double_precision_is_refused_naming_its_key(tmp_path,
 ])
 def test_fe_run_counts_beyond_memory_blame_the_count(tmp_path, run_cli, old, new, key):
     """1e30 cycles were refused as fe.convergence.refinements (the mesh study)."""
-    text = example_path("fe_block_nu03").read_text(encoding="utf-8")
-    assert old in text
-    case = tmp_path / "fe.toml"
-    case.write_text(text.replace(old, new, 1))
-    code, _, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
-    assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: {key}:"), err
-    assert not (tmp_path / "out").exists()
+    code, err = _run_edited(tmp_path, run_cli, "fe_block_nu03", old, new)
+    _assert_refused(tmp_path, code, err, key)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import ONE_NODE_3D
 
 import slipcycle
 from slipcycle.examples import example_text
@@ -443,23 +444,6 @@ def test_every_figure_of_these_runs_lies_inside_its_canvas(request, run):
         assert box.x1 <= width + 0.01 and box.y1 <= height + 0.01, name
 
 
-ONE_NODE_3D = """
-model = "discrete3d"
-[discrete3d]
-A = [[2.0, 0.0], [0.0, 2.0]]
-B = [[0.0, 0.0]]
-C = [[2.0]]
-friction = 0.4
-coordinates = [[0.0, 0.0, 0.0]]
-[loading]
-p0 = [1.0]
-q1 = [[0.6, 0.6]]
-q1_phase = [[0.0, -1.5707963]]
-[run]
-cycles = 10
-steps_per_cycle = 40
-"""
-
 
 def test_one_node_3d_figures_draw_silently_with_quiet(tmp_path, run_cli):
     """A single node at the origin: its slip-direction arrows were scaled by the data
@@ -467,7 +451,7 @@ def test_one_node_3d_figures_draw_silently_with_quiet(tmp_path, run_cli):
     import warnings
 
     case = tmp_path / "one.toml"
-    case.write_text(ONE_NODE_3D)
+    case.write_text(ONE_NODE_3D.format(f=0.4))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         code, out, err = run_cli("-q", "run", case, "--out", tmp_path / "out")
