@@ -187,13 +187,13 @@ class HalfspaceModel:
             if v < 0:
                 raise LoadPathError(key, f"normal load becomes tensile (minimum {v:g} N); "
                                          "adhesion is not modelled", "tensile")
-        self._check_computable(hi)
         if isinstance(self.profile, Cylinder2D) and hi >= self.profile.max_load():
             raise LoadPathError("profile.reference_depth", "too shallow for the largest "
                                 "load: the plane approach needs a < 2d/e", "reference_depth")
         if isinstance(self.profile, Tabulated) and hi > self.profile.P[-1] * (1 + 1e-12):
             raise LoadPathError("profile", f"table ends at {self.profile.P[-1]:g} N but the "
                                            f"loads reach {hi:g} N", "table_end")
+        self._check_computable(hi)
 
     def _check_computable(self, P_max: float) -> None:
         """Refuse (key ``profile.size``) a profile whose contact under the largest load
