@@ -261,11 +261,10 @@ def test_a_sweep_of_the_service_amplitude_gives_the_closed_form_in_every_cell(tm
 
 def test_the_step_control_errors_quoted_in_docs_discrete3d():
     """docs/discrete3d.md (Step control): under a 3e9 N clamp, q_a = 303 N = 1.01 f P, 16
-    samples: D off the closed form by 1.7e-4, 8.2e-6 and 3.3e-8 at step_tol 1e-4, 1e-6
-    and 1e-8 (scaled to the clamp, 0.92 % at all three; 3.6e-4, 7.9e-5 and 8.7e-8 with
-    the dissipation test not scaled by f)."""
+    samples: D off the closed form by 3.6e-4, 7.9e-5 and 8.7e-8 at step_tol 1e-4, 1e-6
+    and 1e-8 (scaled to the clamp, 0.92 % at all three)."""
     D = _closed_form(1e3, 303.0)
-    for step_tol, quoted in ((1e-4, 1.7e-4), (1e-6, 8.2e-6), (1e-8, 3.3e-8)):
+    for step_tol, quoted in ((1e-4, 3.6e-4), (1e-6, 7.9e-5), (1e-8, 8.7e-8)):
         res = simulate3d(_system3(), _load3(1e3, 3e9, 303.0), cycles=20, steps_per_cycle=16,
                          tol=1e-8, step_tol=step_tol)
         assert abs(res.dissipation_per_cycle - D) / D == pytest.approx(quoted, rel=0.05)
