@@ -191,16 +191,9 @@ def read_discrete_case(case: Case, *, record: bool = True) -> DiscreteCase:
     case.finish()
 
     # -- sizes: refuse what cannot be allocated, before any work --------------------------
-    from slipcycle.coupled.sizes import check_memory, run_bytes, system_bytes
+    from slipcycle.coupled.sizes import check_case_sizes
 
-    check_memory(sec.key("A") if not sec.has("stiffness_file") else
-                 sec.key("stiffness_file"), system_bytes(n), f"{n} contact nodes")
-    steps, cyc = run.steps_per_cycle, run.cycles
-    # blame the key the user set (both appear in the message)
-    key = "cycles" if rn.has("cycles") and not rn.has("steps_per_cycle") else "steps_per_cycle"
-    check_memory(rn.key(key), run_bytes(n, steps, cyc, record),
-                 f"{steps:g} steps per cycle × up to {cyc:g} cycles "
-                 f"({n} nodes{', every cycle recorded' if record else ''})")
+    check_case_sizes(sec, rn, "A", n, run, record=record)
 
     # -- model checks (no solving yet): the model's own, under the keys of the case ------
     try:

@@ -18,6 +18,7 @@ import xarray as xr
 
 from slipcycle.coupled.case import SHARED_FLAGS, SHARED_UNITS, CoupledResult, read_start, solve
 from slipcycle.coupled.settings import RunSettings
+from slipcycle.coupled.sizes import check_case_sizes
 from slipcycle.discrete3d.fields import write_fields
 from slipcycle.discrete3d.loads import Load3D
 from slipcycle.discrete3d.model import STATE_NAMES, FrictionalSystem3D, ModelError3D
@@ -132,24 +133,6 @@ def assembly_states(steps, load: Load3D) -> np.ndarray:
     return step_states(steps, r0[:2 * n].reshape(n, 2), r0[2 * n:])
 
 
-def _check_sizes(sec: Section, rn: Section, n: int, run: RunSettings) -> None:
-    """Refuse a model or a run whose memory exceeds the budget, before any work.
-
-    A 3-D node has three degrees of freedom: the estimates of the 2-D model
-    (:mod:`slipcycle.coupled.sizes`, two per node) are taken for 2N nodes, an upper bound.
-    The key blamed is the one the user set (both appear in the message).
-    """
-    from slipcycle.coupled.sizes import check_memory, run_bytes, system_bytes
-
-    check_memory(sec.key("stiffness_file" if sec.has("stiffness_file") else "C"),
-                 system_bytes(2 * n), f"{n} contact nodes")
-    steps, cyc = run.steps_per_cycle, run.cycles
-    key = "cycles" if rn.has("cycles") and not rn.has("steps_per_cycle") else "steps_per_cycle"
-    check_memory(rn.key(key), run_bytes(2 * n, steps, cyc, True),
-                 f"{steps:g} steps per cycle × up to {cyc:g} cycles ({n} nodes, every cycle "
-                 "recorded)")
-
-
 def read_discrete3d_case(case: Case) -> Discrete3DCase:
     """Read and validate every key of a ``discrete3d`` case; no computation beyond checks.
 
@@ -205,7 +188,8 @@ def read_discrete3d_case(case: Case) -> Discrete3DCase:
         raise out.error("fields", f"must be a list of {', '.join(FIELD_FORMATS)} (or [] for "
                                   f"no field files), got {fields!r}")
     case.finish()
-    _check_sizes(sec, rn, n, run)
+    # a 3-D node's two tangential directions: the 2-D estimates for 2N nodes
+    check_case_sizes(sec, rn, "C", n, run, dofs_per_node=2)
 
     try:
         system = FrictionalSystem3D(mats["A"], mats["B"], mats["C"], friction,

@@ -320,8 +320,8 @@ def _load_path_key(model: HalfspaceModel, exc: LoadPathError) -> str:
         normal = f"loading.{nk}0" if low_mean else f"loading.{nk}1"
     if exc.key.startswith("protocol["):
         return f"loading.{exc.key}.{nk}"
-    size = "halfspace.coefficient" if type(model.profile).__name__ == "PowerLaw" \
-        and model.profile_name == "power_law" else "halfspace.radius"
+    # the key that sizes the profile: a power law's coefficient, else the radius
+    size = "halfspace.coefficient" if model.profile_name == "power_law" else "halfspace.radius"
     return {"normal": normal, "profile.reference_depth": "halfspace.reference_depth",
             "profile": "halfspace.table_P", "profile.size": size}.get(exc.key, exc.key)
 

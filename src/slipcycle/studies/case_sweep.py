@@ -228,7 +228,7 @@ def make_task(case_text: str, case_path):
                    case_path=str(case_path) if case_path else None)
 
 
-#: the unit of a case key by its last name (the same meaning in every model; SPEC §6,
+#: the unit of a case key by its last name (the same meaning in every model;
 #: README, docs/*.md): a sweep axis is a coordinate of ``result.nc`` and needs its unit
 _KEY_UNITS = {
     **dict.fromkeys(("friction", "nu", "lam", "compliance_ratio", "frequency_ratio",
